@@ -1,0 +1,161 @@
+//! Loading the robot's MJCF into MuJoCo and finding its parts by name. A [`RobotModel`] is the
+//! shared, read-only template; each environment gets its own [`Simulator`] from it.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use mujoco_rs::prelude::*;
+
+use crate::error::ModelError;
+use crate::robot::{ActuatedJoint, BASE_JOINT, BODY_NAMES, LIFTING_SURFACE_GEOMS, N_ACTUATED_JOINTS, ROBOT_MJCF};
+use crate::simulator::Simulator;
+
+/// Indices into MuJoCo's arrays, resolved once from names.
+#[derive(Debug, Clone)]
+pub(crate) struct Layout {
+    pub base_qpos: usize,
+    pub base_dof: usize,
+    pub joint_qpos: [usize; N_ACTUATED_JOINTS],
+    pub joint_dof: [usize; N_ACTUATED_JOINTS],
+    pub actuator_ids: [usize; N_ACTUATED_JOINTS],
+}
+
+/// The robot model loaded into MuJoCo, validated and with its parts resolved.
+#[derive(Debug, Clone)]
+pub struct RobotModel {
+    origin: String,
+    nominal: Arc<MjModel>,
+    layout: Arc<Layout>,
+}
+
+/// Size of the model as built, for checking against the paper.
+#[derive(Debug, Clone, Copy)]
+pub struct Dimensions {
+    pub total_mass_kg: f64,
+    /// Tip to tip with the wings flat.
+    pub wingspan_m: f64,
+    /// Wing area divided by the wing's own span (the "standard mean chord" of one wing).
+    pub mean_chord_m: f64,
+    pub degrees_of_freedom: usize,
+    pub actuators: usize,
+}
+
+impl RobotModel {
+    /// The robot shipped with flapper (`models/flapper.xml`, compiled in).
+    pub fn flapper() -> Result<Self, ModelError> {
+        Self::from_mjcf(ROBOT_MJCF, "models/flapper.xml")
+    }
+
+    /// Loads an MJCF file.
+    pub fn load(path: &Path) -> Result<Self, ModelError> {
+        let origin = path.display().to_string();
+        // Read it ourselves first: MuJoCo's message for a missing file is less clear than the OS's.
+        std::fs::metadata(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
+        let model = MjModel::from_xml(path).map_err(|e| ModelError::Load { origin: origin.clone(), message: e.to_string() })?;
+        Self::from_mujoco(model, origin)
+    }
+
+    /// Loads MJCF text; `origin` names it in error messages.
+    pub fn from_mjcf(mjcf: &str, origin: &str) -> Result<Self, ModelError> {
+        let model = MjModel::from_xml_string(mjcf)
+            .map_err(|e| ModelError::Load { origin: origin.to_owned(), message: e.to_string() })?;
+        Self::from_mujoco(model, origin.to_owned())
+    }
+
+    fn from_mujoco(model: MjModel, origin: String) -> Result<Self, ModelError> {
+        let not_robot = |problem: String| ModelError::NotTheRobot { origin: origin.clone(), problem };
+        let base = model
+            .name_to_id(MjtObjBase::mjOBJ_JOINT, BASE_JOINT)
+            .ok_or_else(|| not_robot(format!("no free joint named '{BASE_JOINT}'")))?;
+        if model.jnt_type()[base] != MjtJoint::mjJNT_FREE {
+            return Err(not_robot(format!("joint '{BASE_JOINT}' is not a free joint")));
+        }
+        for body in BODY_NAMES {
+            model
+                .name_to_id(MjtObjBase::mjOBJ_BODY, body)
+                .ok_or_else(|| not_robot(format!("no body named '{body}'")))?;
+        }
+        let mut joint_qpos = [0; N_ACTUATED_JOINTS];
+        let mut joint_dof = [0; N_ACTUATED_JOINTS];
+        let mut actuator_ids = [0; N_ACTUATED_JOINTS];
+        for joint in ActuatedJoint::ALL {
+            let i = joint.index();
+            let id = model
+                .name_to_id(MjtObjBase::mjOBJ_JOINT, joint.name())
+                .ok_or_else(|| not_robot(format!("no joint named '{}'", joint.name())))?;
+            if model.jnt_type()[id] != MjtJoint::mjJNT_HINGE {
+                return Err(not_robot(format!("joint '{}' is not a hinge", joint.name())));
+            }
+            let actuator = model
+                .name_to_id(MjtObjBase::mjOBJ_ACTUATOR, joint.name())
+                .ok_or_else(|| not_robot(format!("no actuator named '{}'", joint.name())))?;
+            if model.actuator_trnid()[actuator][0] as usize != id {
+                return Err(not_robot(format!("actuator '{}' does not drive joint '{}'", joint.name(), joint.name())));
+            }
+            joint_qpos[i] = model.jnt_qposadr()[id] as usize;
+            joint_dof[i] = model.jnt_dofadr()[id] as usize;
+            actuator_ids[i] = actuator;
+        }
+        let layout = Layout {
+            base_qpos: model.jnt_qposadr()[base] as usize,
+            base_dof: model.jnt_dofadr()[base] as usize,
+            joint_qpos,
+            joint_dof,
+            actuator_ids,
+        };
+        Ok(Self { origin, nominal: Arc::new(model), layout: Arc::new(layout) })
+    }
+
+    /// Where the model came from (a path, or a name given with the text).
+    pub fn origin(&self) -> &str {
+        &self.origin
+    }
+
+    /// The underlying MuJoCo model (read-only; every simulator edits its own copy).
+    pub fn mujoco(&self) -> &MjModel {
+        &self.nominal
+    }
+
+    pub(crate) fn layout(&self) -> &Arc<Layout> {
+        &self.layout
+    }
+
+    /// A new simulation instance with its own copy of the model (so per-instance edits such as wind
+    /// or masses do not leak between environments), reset to the default initial state.
+    pub fn instantiate(&self) -> Result<Simulator, ModelError> {
+        Simulator::new(self)
+    }
+
+    /// Simulation time step in seconds (0.004 s: 250 Hz).
+    pub fn timestep_s(&self) -> f64 {
+        self.nominal.opt().timestep
+    }
+
+    /// Mass, wingspan, mean chord, DoF and actuator count of the model as built.
+    pub fn dimensions(&self) -> Dimensions {
+        let model = &*self.nominal;
+        let mut data = MjData::new(model);
+        data.forward();
+        let geom = |name: &str| model.name_to_id(MjtObjBase::mjOBJ_GEOM, name);
+        let (left, right) = (geom(LIFTING_SURFACE_GEOMS[0]), geom(LIFTING_SURFACE_GEOMS[1]));
+        let (wingspan_m, mean_chord_m) = match (left, right) {
+            (Some(l), Some(r)) => {
+                let xpos = data.geom_xpos();
+                let size = model.geom_size();
+                // Wings flat: each ellipsoid's span semi-axis lies along world y.
+                let span = (xpos[l][1] + size[l][1]) - (xpos[r][1] - size[r][1]);
+                // Elliptic planform: area pi * a * b over span 2 b.
+                let chord = std::f64::consts::PI * size[l][0] / 2.0;
+                (span, chord)
+            }
+            _ => (f64::NAN, f64::NAN),
+        };
+        Dimensions {
+            total_mass_kg: model.totalmass(),
+            wingspan_m,
+            mean_chord_m,
+            degrees_of_freedom: model.ffi().nv as usize,
+            actuators: model.ffi().nu as usize,
+        }
+    }
+}
