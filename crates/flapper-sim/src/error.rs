@@ -6,7 +6,7 @@ use std::path::PathBuf;
 /// Loading the robot model or editing one of its parameters failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
-    #[error("cannot read model file '{path}': {source}")]
+    #[error("cannot read model file '{path}'")]
     Read { path: PathBuf, source: std::io::Error },
     #[error("MuJoCo rejected model '{origin}': {message}")]
     Load { origin: String, message: String },

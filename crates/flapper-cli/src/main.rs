@@ -1,0 +1,145 @@
+//! `flapper`: the command line. It parses, validates and dispatches; the work happens in the
+//! library crates. Errors reach the user as one line and a non-zero exit code.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots};
+use flapper_sim::RobotModel;
+
+#[derive(Parser)]
+#[command(name = "flapper", version, about = "Learning-based trajectory tracking for a bird-inspired flapping-wing robot")]
+struct Cli {
+    /// Robot model (MJCF). Defaults to the shipped models/flapper.xml.
+    #[arg(long, global = true, value_name = "FILE")]
+    model: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Fly a controller and write the flight as CSV and SVG plots.
+    Fly {
+        /// Which controller flies the robot.
+        #[arg(long, value_enum, default_value_t = ControllerKind::Scripted)]
+        controller: ControllerKind,
+        /// Flight duration in seconds.
+        #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+        seconds: f64,
+        /// Output directory (created if needed).
+        #[arg(long, default_value = "run/fly")]
+        out: PathBuf,
+        /// Tail angle of the glide controller in degrees (negative = trailing edge up).
+        #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
+        tail_deg: f64,
+    },
+    /// Time MuJoCo steps and 20 ms control steps of this model on one thread.
+    Bench {
+        /// Number of timed blocks (the median over blocks is reported).
+        #[arg(long, default_value_t = 21)]
+        blocks: usize,
+        /// MuJoCo steps per block.
+        #[arg(long, default_value_t = 5000)]
+        steps: usize,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ControllerKind {
+    /// The scripted 5.3 Hz flapping gait with pitch, roll and altitude feedback.
+    Scripted,
+    /// Wings flat, tail fixed (--tail-deg): an unpowered glide.
+    Glide,
+}
+
+fn main() -> ExitCode {
+    // MuJoCo's messages go through `log` (silent by default) instead of stdout and MUJOCO_LOG.TXT.
+    // SAFETY: called first thing, before any thread exists or MuJoCo is used.
+    unsafe { mujoco_rs::prelude::install_logging_hook() };
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) if !error.use_stderr() => {
+            // --help and --version
+            let _ = error.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(error) => {
+            let message = error.render().to_string();
+            let first = message.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            eprintln!("error: {first} (see 'flapper --help')");
+            return ExitCode::from(2);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            // One line, whatever the message (MuJoCo's parser messages span several lines).
+            let text = format!("{error:#}");
+            eprintln!("error: {}", text.split_whitespace().collect::<Vec<_>>().join(" "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    let robot = match &cli.model {
+        Some(path) => RobotModel::load(path)?,
+        None => RobotModel::flapper()?,
+    };
+    match cli.command {
+        Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
+        Command::Bench { blocks, steps } => bench_command(&robot, blocks, steps),
+    }
+}
+
+fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg: f64, out: &Path) -> Result<()> {
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
+        bail!("--seconds must be between 0 and 3600, got {seconds}");
+    }
+    if !(-40.0..=40.0).contains(&tail_deg) {
+        bail!("--tail-deg must be within the tail's range of -40..40 deg, got {tail_deg}");
+    }
+    let (mut controller, spec, name): (Box<dyn Controller>, FlightSpec, &str) = match kind {
+        ControllerKind::Scripted => (
+            Box::new(ScriptedGait::new(ScriptedGaitConfig::default())),
+            FlightSpec::cruise_launch(seconds, ScriptedGaitConfig::default().body_pitch_deg),
+            "scripted gait",
+        ),
+        ControllerKind::Glide => {
+            (Box::new(GlideController { tail_rad: tail_deg.to_radians() }), FlightSpec::cruise_launch(seconds, 7.5), "glide")
+        }
+    };
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    let log = fly(robot, controller.as_mut(), &spec)?;
+    let csv = out.join("flight.csv");
+    log.write_csv(&csv)?;
+    let plots = write_flight_plots(&log, out, name)?;
+    let s = log.summary();
+    println!("{name}: {:.2} s flown{}", s.duration_s, log.fault().map_or(String::new(), |f| format!(", stopped: {f}")));
+    println!("  altitude change      {:+.3} m (largest deviation {:.3} m)", s.altitude_change_m, s.max_altitude_deviation_m);
+    println!("  distance             {:.1} m, mean speed {:.2} m/s, mean airspeed {:.2} m/s", s.horizontal_distance_m, s.mean_speed_mps, s.mean_airspeed_mps);
+    if s.altitude_change_m < -0.01 {
+        println!("  glide ratio          {:.2}", s.horizontal_distance_m / -s.altitude_change_m);
+    }
+    println!("  mechanical power     {:.2} W net, {:.2} W absolute", s.mean_mechanical_power_w, s.mean_absolute_power_w);
+    println!("wrote {}", csv.display());
+    for plot in plots {
+        println!("wrote {}", plot.display());
+    }
+    Ok(())
+}
+
+fn bench_command(robot: &RobotModel, blocks: usize, steps: usize) -> Result<()> {
+    if blocks == 0 || steps < 5 {
+        bail!("--blocks must be at least 1 and --steps at least 5 (got {blocks} and {steps})");
+    }
+    let t = flapper_sim::benchmark::time_steps(robot, blocks, steps)?;
+    println!("model {} on one thread, {} blocks of {} steps (flapping at 3.8 m/s):", robot.origin(), t.blocks, t.steps_per_block);
+    println!("  mj_step        median {:.2} us  (min {:.2}, max {:.2})", t.median_us_per_mj_step, t.min_us_per_mj_step, t.max_us_per_mj_step);
+    println!("  control step   median {:.2} us  (5 substeps = 20 ms simulated)", t.median_us_per_control_step);
+    println!("  real-time factor {:.0}x", 20_000.0 / t.median_us_per_control_step);
+    Ok(())
+}

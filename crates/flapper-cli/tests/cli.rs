@@ -1,0 +1,89 @@
+//! The `flapper` command end to end: it writes what it says, and bad input gets one clear line on
+//! stderr, a non-zero exit code, no panic, and leaves existing output alone.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn flapper(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_flapper")).args(args).output().expect("run flapper")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flapper-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Fails unless the command failed with exactly one line on stderr mentioning `needle`.
+fn assert_one_line_error(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "expected failure, stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "expected one line, got: {stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn fly_writes_csv_and_plots() {
+    let out = scratch("fly");
+    let output = flapper(&["fly", "--controller", "scripted", "--seconds", "2", "--out", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("altitude change") && stdout.contains("mechanical power"), "{stdout}");
+    for file in ["flight.csv", "altitude_speed.svg", "joints.svg", "path.svg"] {
+        assert!(out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
+    }
+}
+
+#[test]
+fn missing_model_file_is_one_line_naming_it() {
+    let output = flapper(&["--model", "/no/such/robot.xml", "fly", "--seconds", "1"]);
+    assert_one_line_error(&output, "/no/such/robot.xml");
+}
+
+#[test]
+fn malformed_model_file_is_one_line_with_mujocos_message() {
+    let dir = scratch("malformed");
+    let model = dir.join("broken.xml");
+    std::fs::write(&model, "<mujoco><worldbody><geom type='sphere'/></wrldbody></mujoco>").unwrap();
+    let output = flapper(&["--model", model.to_str().unwrap(), "bench", "--blocks", "1"]);
+    assert_one_line_error(&output, "broken.xml");
+    assert_one_line_error(&output, "MuJoCo");
+}
+
+#[test]
+fn a_model_that_is_not_the_robot_is_rejected() {
+    let dir = scratch("other");
+    let model = dir.join("ball.xml");
+    std::fs::write(&model, "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>").unwrap();
+    assert_one_line_error(&flapper(&["--model", model.to_str().unwrap(), "fly"]), "not the flapping-wing robot");
+}
+
+#[test]
+fn bad_duration_is_rejected_and_existing_output_is_kept() {
+    let out = scratch("keep");
+    std::fs::write(out.join("flight.csv"), "precious").unwrap();
+    for seconds in ["-3", "0", "nan", "1e9"] {
+        let output = flapper(&["fly", "--seconds", seconds, "--out", out.to_str().unwrap()]);
+        assert_one_line_error(&output, "--seconds");
+    }
+    assert_eq!(std::fs::read_to_string(out.join("flight.csv")).unwrap(), "precious");
+}
+
+#[test]
+fn output_path_that_is_a_file_is_one_line() {
+    let dir = scratch("file-out");
+    let file = dir.join("occupied");
+    std::fs::write(&file, "x").unwrap();
+    assert_one_line_error(&flapper(&["fly", "--seconds", "1", "--out", file.to_str().unwrap()]), "occupied");
+}
+
+#[test]
+fn bench_prints_microseconds_per_step() {
+    let output = flapper(&["bench", "--blocks", "3", "--steps", "500"]);
+    assert!(output.status.success());
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("mj_step") && stdout.contains("control step"), "{stdout}");
+}

@@ -1,0 +1,98 @@
+//! The paper's control loop (III-A): joint targets decided at 50 Hz, low-pass filtered at the
+//! 250 Hz simulation rate, applied to the joints' PD servos for 5 substeps.
+
+use flapper_sim::{InitialState, N_ACTUATED_JOINTS, SimFault, Simulator};
+
+use crate::action_filter::LowPassFilter;
+
+/// Rates of the control loop. Paper defaults: 50 Hz decisions, 5 substeps of 4 ms, 7 Hz filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlLoopConfig {
+    /// Simulation steps per control decision (250 Hz / 50 Hz).
+    pub substeps: usize,
+    /// Cutoff of the first-order filter on the joint targets.
+    pub filter_cutoff_hz: f64,
+}
+
+impl Default for ControlLoopConfig {
+    fn default() -> Self {
+        Self { substeps: 5, filter_cutoff_hz: 7.0 }
+    }
+}
+
+/// A simulator driven through the filter at the control rate.
+pub struct ControlLoop {
+    sim: Simulator,
+    filter: LowPassFilter,
+    config: ControlLoopConfig,
+    commanded: [f64; N_ACTUATED_JOINTS],
+    last_step_work: JointWork,
+}
+
+/// Work the actuators did on the joints during one control step, integrated at the simulation rate.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct JointWork {
+    /// Integral of sum(torque * joint velocity): positive work minus work absorbed (J).
+    pub net_j: f64,
+    /// Integral of sum(|torque * joint velocity|): every joule the motors move, either way (J).
+    pub absolute_j: f64,
+}
+
+impl ControlLoop {
+    pub fn new(sim: Simulator, config: ControlLoopConfig) -> Self {
+        let filter = LowPassFilter::new(config.filter_cutoff_hz, sim.timestep_s());
+        let mut control =
+            Self { sim, filter, config, commanded: [0.0; N_ACTUATED_JOINTS], last_step_work: JointWork::default() };
+        control.reset(&InitialState::default());
+        control
+    }
+
+    /// Resets the simulation; the filter starts at the initial joint positions.
+    pub fn reset(&mut self, initial: &InitialState) {
+        self.sim.reset(initial);
+        self.filter.reset(initial.joint_positions_rad);
+        self.commanded = initial.joint_positions_rad;
+    }
+
+    /// Applies one control decision (joint targets in radians, order q1..q5) for one control period.
+    pub fn step(&mut self, targets_rad: &[f64; N_ACTUATED_JOINTS]) -> Result<(), SimFault> {
+        self.commanded = *targets_rad;
+        let dt = self.sim.timestep_s();
+        let mut work = JointWork::default();
+        for _ in 0..self.config.substeps {
+            let filtered = self.filter.update(targets_rad);
+            self.sim.set_joint_targets(&filtered);
+            self.sim.step(1)?;
+            let (torques, velocities) = (self.sim.actuator_torques(), self.sim.joint_velocities());
+            for (torque, velocity) in torques.iter().zip(velocities) {
+                work.net_j += torque * velocity * dt;
+                work.absolute_j += (torque * velocity).abs() * dt;
+            }
+        }
+        self.last_step_work = work;
+        Ok(())
+    }
+
+    /// Seconds of simulated time per control decision (0.02 s).
+    pub fn control_period_s(&self) -> f64 {
+        self.config.substeps as f64 * self.sim.timestep_s()
+    }
+
+    /// Work done on the joints during the last control step.
+    pub fn last_step_work(&self) -> JointWork {
+        self.last_step_work
+    }
+
+    /// The last targets the controller asked for (before the filter).
+    pub fn commanded_targets(&self) -> [f64; N_ACTUATED_JOINTS] {
+        self.commanded
+    }
+
+    pub fn sim(&self) -> &Simulator {
+        &self.sim
+    }
+
+    pub fn sim_mut(&mut self) -> &mut Simulator {
+        &mut self.sim
+    }
+}
