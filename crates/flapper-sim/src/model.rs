@@ -15,6 +15,7 @@ use crate::simulator::Simulator;
 pub(crate) struct Layout {
     pub base_qpos: usize,
     pub base_dof: usize,
+    pub joint_ids: [usize; N_ACTUATED_JOINTS],
     pub joint_qpos: [usize; N_ACTUATED_JOINTS],
     pub joint_dof: [usize; N_ACTUATED_JOINTS],
     pub actuator_ids: [usize; N_ACTUATED_JOINTS],
@@ -75,6 +76,7 @@ impl RobotModel {
                 .name_to_id(MjtObjBase::mjOBJ_BODY, body)
                 .ok_or_else(|| not_robot(format!("no body named '{body}'")))?;
         }
+        let mut joint_ids = [0; N_ACTUATED_JOINTS];
         let mut joint_qpos = [0; N_ACTUATED_JOINTS];
         let mut joint_dof = [0; N_ACTUATED_JOINTS];
         let mut actuator_ids = [0; N_ACTUATED_JOINTS];
@@ -92,6 +94,7 @@ impl RobotModel {
             if model.actuator_trnid()[actuator][0] as usize != id {
                 return Err(not_robot(format!("actuator '{}' does not drive joint '{}'", joint.name(), joint.name())));
             }
+            joint_ids[i] = id;
             joint_qpos[i] = model.jnt_qposadr()[id] as usize;
             joint_dof[i] = model.jnt_dofadr()[id] as usize;
             actuator_ids[i] = actuator;
@@ -99,6 +102,7 @@ impl RobotModel {
         let layout = Layout {
             base_qpos: model.jnt_qposadr()[base] as usize,
             base_dof: model.jnt_dofadr()[base] as usize,
+            joint_ids,
             joint_qpos,
             joint_dof,
             actuator_ids,

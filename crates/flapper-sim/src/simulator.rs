@@ -188,6 +188,12 @@ impl Simulator {
         self.layout.joint_dof.map(|adr| qvel[adr])
     }
 
+    /// Lower and upper limit of each actuated joint (radians, order q1..q5).
+    pub fn joint_ranges(&self) -> [[f64; 2]; N_ACTUATED_JOINTS] {
+        let range = self.data.model().jnt_range();
+        self.layout.joint_ids.map(|id| range[id])
+    }
+
     /// The PD targets currently applied (radians).
     pub fn joint_targets(&self) -> [f64; N_ACTUATED_JOINTS] {
         let ctrl = self.data.ctrl();

@@ -114,7 +114,7 @@ fn fluid_coefficient_edits_change_the_flight_at_once() {
         orientation: quat_from_euler(0.0, 0.13, 0.0),
         ..InitialState::default()
     };
-    let mut altitude_after = |kutta_lift: f64| {
+    let altitude_after = |kutta_lift: f64| {
         let mut sim = robot.instantiate().unwrap();
         for geom in ["wing_left", "wing_right"] {
             let c = sim.fluid_coefficients(geom).unwrap();

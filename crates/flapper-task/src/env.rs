@@ -1,0 +1,236 @@
+//! One trajectory-tracking environment: the robot, its reference, the observation history and the
+//! episode's bookkeeping. The vectorized environments step many of these in parallel.
+
+use std::sync::Arc;
+
+use flapper_sim::{InitialState, ModelError, RobotModel, Vec3, quat_from_euler, quat_to_euler};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::action::{ACTION_SIZE, ActionMap};
+use crate::config::TaskConfig;
+use crate::control_loop::{ControlLoop, ControlLoopConfig};
+use crate::observation::{ObservationBuilder, ObservationLayout, read_frame};
+use crate::randomization::{DrawnDynamics, randomize};
+use crate::reference::generator::procedural;
+use crate::reference::Reference;
+use crate::reward::{RewardInputs, RewardTerms};
+use crate::termination::{EpisodeEnd, check_failure};
+
+/// Where each episode's reference comes from.
+#[derive(Debug, Clone)]
+pub enum ReferenceSource {
+    /// A new seeded random path per episode, from the config's `reference` ranges (training).
+    Procedural,
+    /// The same path every episode (evaluation: a named reference or a CSV).
+    Fixed(Arc<Reference>),
+}
+
+/// The result of one control step.
+#[derive(Debug, Clone, Copy)]
+pub struct StepResult {
+    pub reward: f64,
+    pub terms: RewardTerms,
+    /// Set when the episode ended at this step.
+    pub end: Option<EpisodeEnd>,
+}
+
+/// Summary of a finished episode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EpisodeInfo {
+    pub env_index: usize,
+    pub episode_return: f64,
+    pub length: usize,
+    /// Sum over the episode of each term's kernel value (unweighted).
+    pub term_sums: RewardTerms,
+    pub end: EpisodeEnd,
+}
+
+pub struct FlightEnv {
+    config: Arc<TaskConfig>,
+    control: ControlLoop,
+    actions: ActionMap,
+    observation: ObservationBuilder,
+    source: ReferenceSource,
+    reference: Arc<Reference>,
+    rng: ChaCha8Rng,
+    index: usize,
+    step: usize,
+    previous_action: [f32; ACTION_SIZE],
+    episode_return: f64,
+    term_sums: RewardTerms,
+    drawn: DrawnDynamics,
+}
+
+impl FlightEnv {
+    /// Environment `index` of a run seeded `seed`: its random stream depends on both and nothing else.
+    pub fn new(
+        robot: &RobotModel,
+        config: Arc<TaskConfig>,
+        source: ReferenceSource,
+        seed: u64,
+        index: usize,
+    ) -> Result<Self, ModelError> {
+        let sim = robot.instantiate()?;
+        let actions = ActionMap::new(&sim, config.control.action_scale);
+        let control = ControlLoop::new(
+            sim,
+            ControlLoopConfig { substeps: config.control.substeps, filter_cutoff_hz: config.control.filter_cutoff_hz },
+        );
+        let layout = ObservationLayout {
+            history_frames: config.observation.history_frames,
+            lookahead_steps: config.observation.lookahead_steps,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(index as u64);
+        let placeholder = Arc::new(Reference::new("none", 0.02, vec![Vec3::ZERO]));
+        let mut env = Self {
+            config,
+            control,
+            actions,
+            observation: ObservationBuilder::new(layout),
+            source,
+            reference: placeholder,
+            rng,
+            index,
+            step: 0,
+            previous_action: [0.0; ACTION_SIZE],
+            episode_return: 0.0,
+            term_sums: RewardTerms::default(),
+            drawn: DrawnDynamics::default(),
+        };
+        env.reset()?;
+        Ok(env)
+    }
+
+    pub fn observation_layout(&self) -> ObservationLayout {
+        self.observation.layout()
+    }
+
+    /// Starts a new episode: reference, dynamics, initial state.
+    pub fn reset(&mut self) -> Result<(), ModelError> {
+        let dt = self.control.control_period_s();
+        let lookahead = self.config.observation.lookahead_steps;
+        self.reference = match &self.source {
+            ReferenceSource::Fixed(reference) => reference.clone(),
+            ReferenceSource::Procedural => Arc::new(procedural(
+                &self.config.reference,
+                self.config.episode.max_steps as f64 * dt,
+                (lookahead + 1) as f64 * dt,
+                dt,
+                &mut self.rng,
+            )),
+        };
+        self.drawn = randomize(self.control.sim_mut(), &self.config.randomization, &mut self.rng)?;
+        let initial = self.draw_initial_state();
+        self.control.reset(&initial);
+        self.step = 0;
+        self.previous_action = self.actions.to_action(&initial.joint_positions_rad);
+        self.episode_return = 0.0;
+        self.term_sums = RewardTerms::default();
+        self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
+        Ok(())
+    }
+
+    fn draw_initial_state(&mut self) -> InitialState {
+        let c = &self.config.initial_state;
+        let rng = &mut self.rng;
+        let mut symmetric = |half: f64| if half > 0.0 { rng.random_range(-half..=half) } else { 0.0 };
+        let offset = Vec3::new(
+            symmetric(c.position_offset_m[0]),
+            symmetric(c.position_offset_m[1]),
+            symmetric(c.position_offset_m[2]),
+        );
+        let speed = (self.reference.speed(0) + symmetric(c.speed_offset_mps)).max(0.0);
+        let attitude = c.attitude_offset_deg.to_radians();
+        let (roll, pitch, yaw) = (symmetric(attitude), symmetric(attitude), symmetric(attitude));
+        let direction = self.reference.direction(0);
+        let heading = direction.y.atan2(direction.x);
+        InitialState {
+            position_m: self.reference.target(0) + offset,
+            orientation: quat_from_euler(roll, c.pitch_deg.to_radians() + pitch, heading + yaw),
+            linear_velocity_mps: Vec3::new(heading.cos(), heading.sin(), 0.0) * speed,
+            ..InitialState::default()
+        }
+    }
+
+    /// Applies `action` for one control step. Does not reset: when `end` is set, call `reset`.
+    pub fn step(&mut self, action: &[f32]) -> StepResult {
+        let targets = self.actions.to_targets(action);
+        let fault = self.control.step(&targets).err();
+        self.step += 1;
+        self.previous_action = self.actions.to_action(&targets);
+        let sim = self.control.sim();
+        let position = sim.base_position();
+        let [roll, pitch, _] = quat_to_euler(sim.orientation());
+        let error = (self.reference.target(self.step) - position).length();
+        let power = self.control.last_step_work().absolute_j / self.control.control_period_s();
+        let terms = RewardTerms::evaluate(
+            &self.config.reward,
+            &RewardInputs {
+                position_error_m: error,
+                body_rate_radps: sim.body_rates().length(),
+                roll_rad: roll,
+                pitch_rad: pitch,
+                absolute_power_w: power,
+            },
+        );
+        let end = if fault.is_some() {
+            Some(EpisodeEnd::SimulationFault)
+        } else if let Some(failure) = check_failure(&self.config.episode, error, roll, pitch) {
+            Some(failure)
+        } else if self.step >= self.config.episode.max_steps {
+            Some(EpisodeEnd::TimeLimit)
+        } else if self.step + 1 >= self.reference.steps_with_full_lookahead(self.config.observation.lookahead_steps) {
+            Some(EpisodeEnd::ReferenceEnd)
+        } else {
+            None
+        };
+        // A broken state earns nothing and is not observed.
+        let (reward, terms) = if fault.is_some() { (0.0, RewardTerms::default()) } else { (terms.total(&self.config.reward), terms) };
+        if fault.is_none() {
+            self.observation.push(read_frame(self.control.sim(), &self.previous_action));
+        }
+        self.episode_return += reward;
+        self.term_sums.add(&terms);
+        StepResult { reward, terms, end }
+    }
+
+    /// Writes the current observation into `out` (length `observation_layout().size()`).
+    pub fn observe(&self, out: &mut [f32]) {
+        let sim = self.control.sim();
+        self.observation.write(&self.reference, self.step, sim.base_position(), sim.orientation(), out);
+    }
+
+    /// The finished episode's summary (call when `step` reported an end, before `reset`).
+    pub fn episode_info(&self, end: EpisodeEnd) -> EpisodeInfo {
+        EpisodeInfo {
+            env_index: self.index,
+            episode_return: self.episode_return,
+            length: self.step,
+            term_sums: self.term_sums,
+            end,
+        }
+    }
+
+    pub fn control(&self) -> &ControlLoop {
+        &self.control
+    }
+
+    pub fn reference(&self) -> &Reference {
+        &self.reference
+    }
+
+    pub fn step_count(&self) -> usize {
+        self.step
+    }
+
+    /// The dynamics drawn for this episode.
+    pub fn drawn_dynamics(&self) -> &DrawnDynamics {
+        &self.drawn
+    }
+
+    pub fn config(&self) -> &TaskConfig {
+        &self.config
+    }
+}

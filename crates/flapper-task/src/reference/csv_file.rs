@@ -1,0 +1,93 @@
+//! A user's own reference: a CSV with a header and columns `time_s, x_m, y_m, z_m` (any header
+//! names; the first four columns are used). It is checked, then resampled to the control rate.
+
+use std::path::Path;
+
+use flapper_sim::Vec3;
+
+use super::Reference;
+
+/// Faster than any flapping robot could follow: the paper's robot cruises at 3.8-5.3 m/s.
+pub const MAX_REFERENCE_SPEED_MPS: f64 = 15.0;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceFileError {
+    #[error("cannot read reference '{path}': {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("reference '{path}' line {line}: {message}")]
+    Line { path: String, line: usize, message: String },
+    #[error("reference '{path}': {message}")]
+    Whole { path: String, message: String },
+}
+
+/// Loads and checks a reference CSV, resampled every `dt_s`. It must cover at least
+/// `lookahead_steps + 1` control steps.
+pub fn load_reference_csv(path: &Path, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| ReferenceFileError::Read { path: path.display().to_string(), source })?;
+    parse_reference_csv(&text, &path.display().to_string(), dt_s, lookahead_steps)
+}
+
+/// As [`load_reference_csv`] from text; `origin` names it in errors.
+pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
+    let at_line = |line: usize, message: String| ReferenceFileError::Line { path: origin.to_owned(), line, message };
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).trim(csv::Trim::All).from_reader(text.as_bytes());
+    let mut samples: Vec<(f64, Vec3)> = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line() as usize);
+            at_line(line, e.to_string())
+        })?;
+        let line = record.position().map_or(0, |p| p.line() as usize);
+        if record.len() < 4 {
+            return Err(at_line(line, format!("expected 4 columns (time, x, y, z), found {}", record.len())));
+        }
+        let mut values = [0.0f64; 4];
+        for (i, value) in values.iter_mut().enumerate() {
+            let field = &record[i];
+            *value = field.parse().map_err(|_| at_line(line, format!("'{field}' is not a number")))?;
+            if !value.is_finite() {
+                return Err(at_line(line, format!("'{field}' is not finite")));
+            }
+        }
+        let (time, position) = (values[0], Vec3::new(values[1], values[2], values[3]));
+        if let Some(&(previous_time, previous)) = samples.last() {
+            if time <= previous_time {
+                return Err(at_line(line, format!("time {time} s does not increase (previous {previous_time} s)")));
+            }
+            let speed = (position - previous).length() / (time - previous_time);
+            if speed > MAX_REFERENCE_SPEED_MPS {
+                return Err(at_line(
+                    line,
+                    format!("speed {speed:.1} m/s since the previous point; no flying robot here follows more than {MAX_REFERENCE_SPEED_MPS} m/s"),
+                ));
+            }
+        }
+        samples.push((time, position));
+    }
+    let whole = |message: String| ReferenceFileError::Whole { path: origin.to_owned(), message };
+    let (Some(&(t0, _)), Some(&(t1, _))) = (samples.first(), samples.last()) else {
+        return Err(whole("no data rows".into()));
+    };
+    let needed_s = lookahead_steps as f64 * dt_s;
+    if t1 - t0 < needed_s {
+        return Err(whole(format!(
+            "covers {:.3} s; at least {needed_s:.2} s are needed for the {lookahead_steps}-step lookahead",
+            t1 - t0
+        )));
+    }
+    // Resample by linear interpolation at t0, t0 + dt, ...
+    let steps = ((t1 - t0) / dt_s + 1e-9).floor() as usize;
+    let mut points = Vec::with_capacity(steps + 1);
+    let mut segment = 0;
+    for k in 0..=steps {
+        let t = t0 + k as f64 * dt_s;
+        while segment + 2 < samples.len() && samples[segment + 1].0 < t {
+            segment += 1;
+        }
+        let ((ta, pa), (tb, pb)) = (samples[segment], samples[(segment + 1).min(samples.len() - 1)]);
+        let u = if tb > ta { ((t - ta) / (tb - ta)).clamp(0.0, 1.0) } else { 0.0 };
+        points.push(pa.lerp(pb, u));
+    }
+    Ok(Reference::new(origin, dt_s, points))
+}

@@ -1,0 +1,76 @@
+//! Reference trajectories (paper III-B, IV-C): 3-D positions sampled at the control rate (50 Hz).
+//! The robot is rewarded for its distance to the current point and sees the next points ahead.
+//!
+//! - [`generator`]: pieces (commands of forward speed, vertical speed and yaw rate; vertical loops)
+//!   joined into a path, and the seeded procedural generator of the curriculum;
+//! - [`named`]: the references of the paper's results, by name;
+//! - [`csv_file`]: a user's own reference from a CSV of time, x, y, z, validated.
+
+pub mod csv_file;
+pub mod generator;
+pub mod named;
+
+use flapper_sim::Vec3;
+
+/// A path sampled every `dt_s` seconds; point k is the target at control step k.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reference {
+    name: String,
+    dt_s: f64,
+    points: Vec<Vec3>,
+}
+
+impl Reference {
+    pub fn new(name: impl Into<String>, dt_s: f64, points: Vec<Vec3>) -> Self {
+        assert!(!points.is_empty(), "a reference needs at least one point");
+        Self { name: name.into(), dt_s, points }
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    pub fn points(&self) -> &[Vec3] {
+        &self.points
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    pub fn duration_s(&self) -> f64 {
+        (self.points.len() - 1) as f64 * self.dt_s
+    }
+
+    /// The target at control step `step` (the last point once the path has run out).
+    pub fn target(&self, step: usize) -> Vec3 {
+        self.points[step.min(self.points.len() - 1)]
+    }
+
+    /// Direction of travel at `step` (unit vector; +x if the path stands still).
+    pub fn direction(&self, step: usize) -> Vec3 {
+        let a = self.target(step);
+        let b = self.target(step + 1);
+        let d = if b != a { b - a } else { a - self.target(step.saturating_sub(1)) };
+        d.try_normalize().unwrap_or(Vec3::X)
+    }
+
+    /// Speed along the path at `step` (m/s).
+    pub fn speed(&self, step: usize) -> f64 {
+        let (a, b) = (self.target(step), self.target(step + 1));
+        (b - a).length() / self.dt_s
+    }
+
+    /// Steps at which the whole lookahead window still lies on the path.
+    pub fn steps_with_full_lookahead(&self, lookahead_steps: usize) -> usize {
+        self.points.len().saturating_sub(lookahead_steps)
+    }
+}
