@@ -217,6 +217,11 @@ impl FlightEnv {
         &self.control
     }
 
+    /// The simulator, for tools and tests that need to reach inside (e.g. to inject a fault).
+    pub fn sim_mut(&mut self) -> &mut flapper_sim::Simulator {
+        self.control.sim_mut()
+    }
+
     pub fn reference(&self) -> &Reference {
         &self.reference
     }

@@ -160,6 +160,10 @@ impl FlightVecEnv {
     pub fn envs(&self) -> &[FlightEnv] {
         &self.envs
     }
+
+    pub fn envs_mut(&mut self) -> &mut [FlightEnv] {
+        &mut self.envs
+    }
 }
 
 fn leak(message: String) -> &'static str {

@@ -31,7 +31,7 @@ pub fn load_reference_csv(path: &Path, dt_s: f64, lookahead_steps: usize) -> Res
 /// As [`load_reference_csv`] from text; `origin` names it in errors.
 pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
     let at_line = |line: usize, message: String| ReferenceFileError::Line { path: origin.to_owned(), line, message };
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).trim(csv::Trim::All).from_reader(text.as_bytes());
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(true).trim(csv::Trim::All).from_reader(text.as_bytes());
     let mut samples: Vec<(f64, Vec3)> = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| {

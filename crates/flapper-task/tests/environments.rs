@@ -1,0 +1,236 @@
+//! Environments: observation layout and frame conventions, episode ends, randomization read back
+//! from the model, seeded reproducibility across thread counts, and fault isolation.
+
+use std::sync::Arc;
+
+use flapper_sim::{BODY_NAMES, RobotModel, Vec3};
+use flapper_task::config::TaskConfig;
+use flapper_task::env::{FlightEnv, ReferenceSource};
+use flapper_task::observation::{FRAME_SIZE, ObservationLayout};
+use flapper_task::reference::Reference;
+use flapper_task::reference::named::named;
+use flapper_task::termination::EpisodeEnd;
+use flapper_task::vec_env::FlightVecEnv;
+
+fn robot() -> RobotModel {
+    RobotModel::flapper().unwrap()
+}
+
+/// A straight, level reference along world +y: the robot must fly "north".
+fn northbound() -> Arc<Reference> {
+    let points = (0..2000).map(|k| Vec3::new(0.0, 3.8 * 0.02 * k as f64, 10.0)).collect();
+    Arc::new(Reference::new("north", 0.02, points))
+}
+
+fn exact_start(mut config: TaskConfig) -> TaskConfig {
+    config.initial_state.position_offset_m = [0.0; 3];
+    config.initial_state.speed_offset_mps = 0.0;
+    config.initial_state.attitude_offset_deg = 0.0;
+    config.initial_state.pitch_deg = 0.0;
+    config
+}
+
+#[test]
+fn observation_has_540_named_numbers() {
+    let layout = ObservationLayout { history_frames: 25, lookahead_steps: 30 };
+    assert_eq!(FRAME_SIZE, 18);
+    assert_eq!(layout.size(), 540);
+    let names = layout.names();
+    assert_eq!(names.len(), 540);
+    let unique: std::collections::HashSet<_> = names.iter().collect();
+    assert_eq!(unique.len(), 540);
+    assert_eq!(names[0], "t-24.quat_w");
+    assert_eq!(names[449], "t-0.action.tail_pitch");
+    assert_eq!(names[450], "ahead+01.x_body_m");
+    assert_eq!(names[539], "ahead+30.z_body_m");
+}
+
+#[test]
+fn a_robot_flying_straight_at_its_target_sees_it_straight_ahead() {
+    let config = Arc::new(exact_start(TaskConfig::default()));
+    let env = FlightEnv::new(&robot(), config, ReferenceSource::Fixed(northbound()), 1, 0).unwrap();
+    let layout = env.observation_layout();
+    let mut obs = vec![0.0f32; layout.size()];
+    env.observe(&mut obs);
+    let ahead = &obs[layout.lookahead_start()..];
+    for (i, point) in ahead.chunks(3).enumerate() {
+        let expected = 3.8 * 0.02 * (i + 1) as f32;
+        assert!((point[0] - expected).abs() < 1e-4, "point {i}: x_body {} expected {expected}", point[0]);
+        assert!(point[1].abs() < 1e-5 && point[2].abs() < 1e-5, "point {i}: off axis {point:?}");
+    }
+    // The newest frame holds the orientation (yawed 90 degrees), the airspeed and zero joints.
+    let newest = &obs[(25 - 1) * FRAME_SIZE..25 * FRAME_SIZE];
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    assert!((newest[0] - half).abs() < 1e-6 && (newest[3] - half).abs() < 1e-6, "quaternion {:?}", &newest[0..4]);
+    assert!((newest[12] - 3.8).abs() < 1e-5, "pitot airspeed {}", newest[12]);
+    assert!(newest[7..12].iter().all(|q| q.abs() < 1e-9));
+}
+
+#[test]
+fn history_shifts_by_one_frame_per_step() {
+    let config = Arc::new(exact_start(TaskConfig::default()));
+    let mut env = FlightEnv::new(&robot(), config, ReferenceSource::Fixed(northbound()), 1, 0).unwrap();
+    let size = env.observation_layout().size();
+    let (mut before, mut after) = (vec![0.0f32; size], vec![0.0f32; size]);
+    env.step(&[0.5, 0.0, 0.5, 0.0, -0.2]);
+    env.observe(&mut before);
+    env.step(&[-0.5, 0.0, -0.5, 0.0, -0.2]);
+    env.observe(&mut after);
+    assert_eq!(&after[..24 * FRAME_SIZE], &before[FRAME_SIZE..25 * FRAME_SIZE]);
+    // The newest frame carries the action just taken.
+    assert_eq!(&after[24 * FRAME_SIZE + 13..25 * FRAME_SIZE], &[-0.5, 0.0, -0.5, 0.0, -0.2]);
+}
+
+#[test]
+fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
+    // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
+    let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();
+    let config = Arc::new(exact_start(TaskConfig::default()));
+    let mut env = FlightEnv::new(&robot(), config, ReferenceSource::Fixed(Arc::new(Reference::new("up", 0.02, points))), 1, 0).unwrap();
+    let end = (0..500).find_map(|_| env.step(&[0.0; 5]).end).expect("episode should end");
+    assert_eq!(end, EpisodeEnd::TooFarFromTarget);
+    assert!(end.is_termination());
+    assert!(env.step_count() < 200, "ended after {} steps", env.step_count());
+}
+
+#[test]
+fn a_tumbling_robot_ends_on_attitude_in_stage_1_but_not_stage_3() {
+    let tumble = |stage: i64| {
+        let mut config = exact_start(TaskConfig::stage(stage).unwrap());
+        config.episode.max_position_error_m = 1000.0;
+        // Launched nose up past the vertical: upside down, heading back.
+        config.initial_state.pitch_deg = 100.0;
+        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap();
+        (0..25).find_map(|_| env.step(&[0.0; 5]).end)
+    };
+    assert_eq!(tumble(1), Some(EpisodeEnd::AttitudeLimit));
+    assert_ne!(tumble(3), Some(EpisodeEnd::AttitudeLimit));
+}
+
+#[test]
+fn a_named_reference_is_truncated_when_it_runs_out() {
+    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.62).unwrap());
+    let mut config = exact_start(TaskConfig::default());
+    config.episode.max_position_error_m = 1000.0;
+    let steps = reference.len();
+    let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+    let end = (0..2000).find_map(|_| env.step(&[0.0; 5]).end);
+    assert_eq!(end, Some(EpisodeEnd::ReferenceEnd));
+    assert!(!EpisodeEnd::ReferenceEnd.is_termination());
+    assert_eq!(env.step_count(), steps - 31);
+}
+
+#[test]
+fn time_limit_truncates_after_max_steps() {
+    let mut config = exact_start(TaskConfig::default());
+    config.episode.max_steps = 20;
+    let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Procedural, 1, 0).unwrap();
+    let end = (0..100).find_map(|_| env.step(&[0.0; 5]).end);
+    assert_eq!(end, Some(EpisodeEnd::TimeLimit));
+    assert_eq!(env.step_count(), 20);
+}
+
+#[test]
+fn randomization_draws_within_table_iii_and_reads_back_from_the_model() {
+    let robot = robot();
+    let nominal = robot.instantiate().unwrap();
+    let config = TaskConfig::stage(4).unwrap();
+    let ranges = config.randomization.clone();
+    let mut env = FlightEnv::new(&robot, Arc::new(config), ReferenceSource::Procedural, 42, 3).unwrap();
+    let mut winds = Vec::new();
+    for _ in 0..5 {
+        let sim = env.control().sim();
+        for body in BODY_NAMES {
+            let ratio = sim.body_mass(body).unwrap() / nominal.body_mass(body).unwrap();
+            assert!((0.9 - 1e-12..=1.1 + 1e-12).contains(&ratio), "{body} mass x{ratio}");
+            let ratio = sim.body_inertia(body).unwrap()[0] / nominal.body_inertia(body).unwrap()[0];
+            assert!((0.9 - 1e-12..=1.1 + 1e-12).contains(&ratio), "{body} inertia x{ratio}");
+            let shift = sim.body_com(body).unwrap() - nominal.body_com(body).unwrap();
+            assert!(shift.abs().max_element() <= ranges.link_com_offset_m + 1e-12);
+        }
+        for geom in ["wing_left", "wing_right", "tail"] {
+            let (c, c0) = (sim.fluid_coefficients(geom).unwrap().to_array(), nominal.fluid_coefficients(geom).unwrap().to_array());
+            for (value, base) in c.iter().zip(c0) {
+                assert!((0.7 - 1e-12..=1.3 + 1e-12).contains(&(value / base)), "{geom} fluid x{}", value / base);
+            }
+            let m = sim.added_mass(geom).unwrap()[2] / nominal.added_mass(geom).unwrap()[2];
+            assert!((0.9 - 1e-12..=1.1 + 1e-12).contains(&m));
+        }
+        for joint in ["flap_left", "tail_pitch"] {
+            let d = sim.joint_damping(joint).unwrap() / nominal.joint_damping(joint).unwrap();
+            assert!((0.9 - 1e-12..=1.1 + 1e-12).contains(&d));
+        }
+        let wind = sim.wind();
+        assert!(wind.x.abs() <= 2.0 && wind.y.abs() <= 2.0 && wind.z.abs() <= 1.5);
+        assert_eq!(wind, env.drawn_dynamics().wind_mps);
+        winds.push(wind);
+        env.reset().unwrap();
+    }
+    assert!(winds.windows(2).all(|w| w[0] != w[1]), "each episode draws anew");
+    // Stage 3 leaves the model nominal.
+    let plain = FlightEnv::new(&robot, Arc::new(TaskConfig::stage(3).unwrap()), ReferenceSource::Procedural, 42, 3).unwrap();
+    assert_eq!(plain.control().sim().wind(), Vec3::ZERO);
+    assert_eq!(plain.control().sim().body_mass("tail").unwrap(), nominal.body_mass("tail").unwrap());
+}
+
+fn run(seed: u64, threads: usize, stage: i64) -> (Vec<f32>, Vec<f32>, usize) {
+    let mut envs = FlightVecEnv::new(&robot(), TaskConfig::stage(stage).unwrap(), ReferenceSource::Procedural, 8, seed, threads).unwrap();
+    let mut rewards = Vec::new();
+    let mut finished = 0;
+    for k in 0..150 {
+        let phase = k as f32 * 0.66;
+        let actions: Vec<f32> = (0..8).flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32]).collect();
+        envs.step(&actions).unwrap();
+        rewards.extend_from_slice(envs.rewards());
+        finished += envs.take_finished_episodes().len();
+    }
+    (envs.observations().to_vec(), rewards, finished)
+}
+
+#[test]
+fn same_seed_is_bit_identical_whatever_the_thread_count() {
+    let one = run(11, 1, 4);
+    let two = run(11, 2, 4);
+    let three = run(11, 3, 4);
+    assert_eq!(one, two);
+    assert_eq!(one, three);
+    assert_ne!(one.1, run(12, 2, 4).1, "another seed gives another run");
+}
+
+#[test]
+fn finished_episodes_reset_automatically_and_report_why() {
+    let mut envs = FlightVecEnv::new(&robot(), TaskConfig::default(), ReferenceSource::Procedural, 4, 5, 2).unwrap();
+    let mut infos = Vec::new();
+    for _ in 0..400 {
+        envs.step(&[0.0; 20]).unwrap();
+        for (i, (&terminated, &truncated)) in envs.terminated().iter().zip(envs.truncated()).enumerate() {
+            assert!(!(terminated && truncated), "env {i} both terminated and truncated");
+        }
+        infos.extend(envs.take_finished_episodes());
+    }
+    assert!(!infos.is_empty(), "unpowered robots should fall away from the reference");
+    for info in &infos {
+        assert_eq!(info.end, EpisodeEnd::TooFarFromTarget);
+        assert!(info.length > 0 && info.episode_return > 0.0);
+        assert!(info.term_sums.position <= info.length as f64);
+    }
+    // After a reset the episode counter restarted.
+    assert!(envs.envs().iter().all(|e| e.step_count() < 400));
+}
+
+#[test]
+fn a_simulation_fault_ends_only_that_episode_and_is_counted() {
+    let mut envs = FlightVecEnv::new(&robot(), TaskConfig::default(), ReferenceSource::Procedural, 4, 5, 2).unwrap();
+    envs.envs_mut()[2].sim_mut().set_wind(Vec3::new(1e12, 0.0, 0.0)).unwrap();
+    envs.step(&[0.0; 20]).unwrap();
+    let infos = envs.take_finished_episodes();
+    assert_eq!(infos.len(), 1, "{infos:?}");
+    assert_eq!((infos[0].env_index, infos[0].end), (2, EpisodeEnd::SimulationFault));
+    assert_eq!(envs.simulation_faults(), 1);
+    assert!(envs.truncated()[2] && !envs.terminated()[2]);
+    assert!(envs.observations().iter().all(|x| x.is_finite()));
+    // The faulted environment was reset with nominal wind and flies on.
+    assert_eq!(envs.envs()[2].control().sim().wind(), Vec3::ZERO);
+    envs.step(&[0.0; 20]).unwrap();
+    assert!(envs.take_finished_episodes().is_empty());
+}

@@ -1,0 +1,114 @@
+//! Reference paths: named shapes, seeded generation, CSV validation.
+
+use flapper_sim::Vec3;
+use flapper_task::config::{ReferenceConfig, TaskConfig};
+use flapper_task::reference::csv_file::parse_reference_csv;
+use flapper_task::reference::generator::procedural;
+use flapper_task::reference::named::{named, reference_names};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+const DT: f64 = 0.02;
+
+fn heading_deg(reference: &flapper_task::reference::Reference, step: usize) -> f64 {
+    let d = reference.direction(step);
+    d.y.atan2(d.x).to_degrees()
+}
+
+#[test]
+fn every_named_reference_exists_and_moves() {
+    for name in reference_names() {
+        let r = named(name, Vec3::ZERO, DT, 0.0).unwrap_or_else(|| panic!("{name} missing"));
+        assert!(r.duration_s() > 5.0, "{name}: {} s", r.duration_s());
+        assert!(r.points().iter().all(|p| p.is_finite()));
+        for k in 0..r.len() - 1 {
+            assert!(r.speed(k) < 6.0, "{name}: {:.2} m/s at step {k}", r.speed(k));
+        }
+    }
+    assert!(named("barrel-roll", Vec3::ZERO, DT, 0.0).is_none());
+}
+
+#[test]
+fn longitudinal_and_lateral_have_the_papers_durations_and_speeds() {
+    let lon = named("longitudinal", Vec3::ZERO, DT, 0.0).unwrap();
+    assert!((lon.duration_s() - 24.0).abs() < 0.03, "{}", lon.duration_s());
+    let horizontal = |r: &flapper_task::reference::Reference, k: usize| (r.target(k + 1) - r.target(k)).truncate().length() / DT;
+    assert!((horizontal(&lon, 100) - 3.8).abs() < 1e-9);
+    // Climb during the second 6 s, descend during the last 12 s.
+    assert!(lon.target(600).z - lon.target(300).z > 2.0);
+    assert!(lon.target(1199).z < lon.target(600).z - 5.0);
+    let lat = named("lateral", Vec3::ZERO, DT, 0.0).unwrap();
+    assert!((lat.duration_s() - 18.0).abs() < 0.03);
+    assert!((horizontal(&lat, 10) - 5.3).abs() < 1e-9);
+    assert!(lat.points().iter().all(|p| p.z.abs() < 1e-9), "lateral stays level");
+}
+
+#[test]
+fn a_loop_returns_to_its_start_height_and_heading() {
+    let r = named("loop", Vec3::new(0.0, 0.0, 10.0), DT, 0.0).unwrap();
+    let (before, after) = (150, 300); // loop from 3 s to 6 s
+    assert!((r.target(after).z - r.target(before).z).abs() < 0.02, "height {} vs {}", r.target(after).z, r.target(before).z);
+    let top = r.points()[before..after].iter().map(|p| p.z).fold(f64::MIN, f64::max);
+    assert!(top - 10.0 > 3.0, "loop top only {:.2} m up", top - 10.0);
+    assert!(heading_deg(&r, after + 5).abs() < 1.0);
+}
+
+#[test]
+fn a_sharp_turn_reverses_heading_within_1_2_seconds() {
+    let r = named("sharp-turn", Vec3::ZERO, DT, 0.0).unwrap();
+    assert!(heading_deg(&r, 140).abs() < 1.0);
+    let after = heading_deg(&r, 150 + 61).abs();
+    assert!((after - 180.0).abs() < 1.0, "heading {after} deg after 1.2 s");
+}
+
+#[test]
+fn immelmann_climbs_and_roll_off_the_bottom_descends_both_reversing() {
+    let up = named("immelmann", Vec3::ZERO, DT, 0.0).unwrap();
+    let down = named("roll-off-the-bottom", Vec3::ZERO, DT, 0.0).unwrap();
+    let end = 150 + 90 + 10;
+    assert!(up.target(end).z > 3.0 && down.target(end).z < -3.0);
+    assert!((heading_deg(&up, end).abs() - 180.0).abs() < 1.0);
+    assert!((heading_deg(&down, end).abs() - 180.0).abs() < 1.0);
+}
+
+#[test]
+fn procedural_references_are_seeded_and_follow_the_stage() {
+    let stage2 = TaskConfig::stage(2).unwrap().reference;
+    let make = |seed| procedural(&stage2, 30.0, 0.62, DT, &mut ChaCha8Rng::seed_from_u64(seed));
+    assert_eq!(make(7), make(7));
+    assert_ne!(make(7), make(8));
+    assert!(make(7).duration_s() >= 30.6);
+    let stage1 = procedural(&ReferenceConfig::default(), 30.0, 0.62, DT, &mut ChaCha8Rng::seed_from_u64(1));
+    assert!(stage1.points().iter().all(|p| p.y.abs() < 1e-9 && p.z.abs() < 1e-9), "stage 1 flies straight and level");
+    assert!((stage1.speed(100) - 3.8).abs() < 1e-9);
+    // Stage 2 climbs or dives after the first 3 s command.
+    let r = make(3);
+    let vertical: f64 = (150..1500).map(|k| (r.target(k + 1).z - r.target(k).z).abs()).sum();
+    assert!(vertical > 1.0);
+}
+
+#[test]
+fn csv_reference_loads_and_resamples() {
+    let text = "time_s,x_m,y_m,z_m\n0,0,0,10\n0.5,2,0,10\n1.0,4,0,10.5\n";
+    let r = parse_reference_csv(text, "mine.csv", DT, 30).unwrap();
+    assert_eq!(r.len(), 51);
+    assert!((r.target(25) - Vec3::new(2.0, 0.0, 10.0)).length() < 1e-9);
+    assert!((r.target(50) - Vec3::new(4.0, 0.0, 10.5)).length() < 1e-9);
+}
+
+#[test]
+fn bad_csv_references_are_rejected_naming_the_line() {
+    let check = |text: &str, needles: &[&str]| {
+        let err = parse_reference_csv(text, "path.csv", DT, 30).unwrap_err().to_string();
+        for needle in needles {
+            assert!(err.contains(needle), "'{needle}' not in: {err}");
+        }
+    };
+    check("t,x,y,z\n0,0,0,0\n0.5,1,0,0\n0.5,2,0,0\n", &["path.csv", "line 4", "does not increase"]);
+    check("t,x,y,z\n0,0,0,0\n0.5,nan,0,0\n1.0,2,0,0\n", &["line 3", "not finite"]);
+    check("t,x,y,z\n0,0,0,0\n0.5,abc,0,0\n", &["line 3", "'abc' is not a number"]);
+    check("t,x,y,z\n0,0,0,0\n0.5,50,0,0\n1.0,51,0,0\n", &["line 3", "m/s"]);
+    check("t,x,y,z\n0,0,0,0\n0.3,1,0,0\n", &["0.300 s", "lookahead"]);
+    check("t,x,y,z\n0,0,0\n", &["line 2", "4 columns"]);
+    check("t,x,y,z\n", &["no data rows"]);
+}
