@@ -44,6 +44,12 @@ enum Command {
         /// MuJoCo steps per block.
         #[arg(long, default_value_t = 5000)]
         steps: usize,
+        /// Also time this many vectorized environments (0 = skip).
+        #[arg(long, default_value_t = 256)]
+        envs: usize,
+        /// Worker threads for the environments (0 = one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
     },
 }
 
@@ -91,7 +97,7 @@ fn run(cli: Cli) -> Result<()> {
     };
     match cli.command {
         Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
-        Command::Bench { blocks, steps } => bench_command(&robot, blocks, steps),
+        Command::Bench { blocks, steps, envs, threads } => bench_command(&robot, blocks, steps, envs, threads),
     }
 }
 
@@ -132,7 +138,7 @@ fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg:
     Ok(())
 }
 
-fn bench_command(robot: &RobotModel, blocks: usize, steps: usize) -> Result<()> {
+fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize) -> Result<()> {
     if blocks == 0 || steps < 5 {
         bail!("--blocks must be at least 1 and --steps at least 5 (got {blocks} and {steps})");
     }
@@ -141,5 +147,14 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize) -> Result<()> 
     println!("  mj_step        median {:.2} us  (min {:.2}, max {:.2})", t.median_us_per_mj_step, t.min_us_per_mj_step, t.max_us_per_mj_step);
     println!("  control step   median {:.2} us  (5 substeps = 20 ms simulated)", t.median_us_per_control_step);
     println!("  real-time factor {:.0}x", 20_000.0 / t.median_us_per_control_step);
+    if envs > 0 {
+        let env_blocks = blocks.clamp(1, 7);
+        let v = flapper_task::benchmark::time_vec_env(robot, envs, threads, env_blocks, 50)?;
+        let raw = v.threads as f64 * 1e6 / t.median_us_per_control_step;
+        println!("{} environments on {} threads, {} blocks of 50 steps (observation, reward, resets included):", v.envs, v.threads, v.blocks);
+        println!("  environment steps/s  median {:.0}  (min {:.0}, max {:.0})", v.median_steps_per_s, v.min_steps_per_s, v.max_steps_per_s);
+        println!("  raw MuJoCo bound     {raw:.0} control steps/s ({} threads x one-thread control step)", v.threads);
+        println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
+    }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! Flying a controller through the control loop and recording every control step.
 
-use flapper_sim::{InitialState, ModelError, RobotModel, Vec3, quat_from_euler};
+use flapper_sim::{InitialState, ModelError, RobotModel, Simulator, Vec3, quat_from_euler};
 use flapper_task::{ControlLoop, ControlLoopConfig};
 
 use crate::controller::{Controller, FlightState};
@@ -32,7 +32,12 @@ impl FlightSpec {
 
 /// Flies `controller` for `spec.seconds` (or until the simulation faults) and logs each control step.
 pub fn fly(robot: &RobotModel, controller: &mut dyn Controller, spec: &FlightSpec) -> Result<FlightLog, ModelError> {
-    let mut control = ControlLoop::new(robot.instantiate()?, spec.control);
+    Ok(fly_simulator(robot.instantiate()?, controller, spec))
+}
+
+/// As [`fly`], with a simulator prepared by the caller (edited masses, wind, fluid coefficients...).
+pub fn fly_simulator(sim: Simulator, controller: &mut dyn Controller, spec: &FlightSpec) -> FlightLog {
+    let mut control = ControlLoop::new(sim, spec.control);
     control.reset(&spec.initial);
     controller.reset();
     let steps = (spec.seconds / control.control_period_s()).round() as usize;
@@ -49,5 +54,5 @@ pub fn fly(robot: &RobotModel, controller: &mut dyn Controller, spec: &FlightSpe
         }
         state = FlightState::read(control.sim());
     }
-    Ok(log)
+    log
 }

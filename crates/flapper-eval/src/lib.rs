@@ -9,7 +9,7 @@ mod plots;
 mod scripted;
 
 pub use controller::{Controller, FlightState, GlideController};
-pub use flight::{FlightSpec, fly};
+pub use flight::{FlightSpec, fly, fly_simulator};
 pub use flight_log::{FlightLog, FlightRow, FlightSummary};
 pub use plots::write_flight_plots;
 pub use scripted::{ScriptedGait, ScriptedGaitConfig};

@@ -5,7 +5,7 @@
 //! into a glide at 3.5-4.1 m/s with a glide ratio of 4.0-5.2 (measured 3.81 m/s, 4.6). These stand
 //! in for the paper's hand tuning of the fluid coefficients "to match the designed lift-to-drag ratio".
 
-use flapper_eval::{FlightLog, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly};
+use flapper_eval::{FlightLog, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, fly_simulator};
 use flapper_sim::{RobotModel, Vec3};
 
 fn glide(tail_deg: f64) -> FlightLog {
@@ -94,5 +94,32 @@ fn flight_log_writes_csv_with_a_header_and_one_row_per_step() {
     let plots = flapper_eval::write_flight_plots(&log, &dir, "test").unwrap();
     for plot in plots {
         assert!(std::fs::read_to_string(&plot).unwrap().contains("<svg"), "{}", plot.display());
+    }
+}
+
+/// Why the randomization's centre-of-mass default is +-5 mm, not the paper's +-50 mm (README,
+/// "Randomization"): moved 50 mm either way along x, the main body's centre of mass leaves the
+/// robot unable to glide; moved 5 mm, it still glides.
+#[test]
+fn the_papers_centre_of_mass_range_grounds_this_model_and_ours_does_not() {
+    let robot = RobotModel::flapper().unwrap();
+    let glide_with_com_shift = |dx: f64| {
+        let mut sim = robot.instantiate().unwrap();
+        let com = sim.body_com("main_body").unwrap();
+        sim.set_body_com("main_body", com + Vec3::new(dx, 0.0, 0.0)).unwrap();
+        let mut glider = GlideController { tail_rad: -10f64.to_radians() };
+        let log = fly_simulator(sim, &mut glider, &FlightSpec::cruise_launch(20.0, 7.5));
+        let worst_pitch = log.rows().iter().map(|r| r.state.euler_rad[1].abs()).fold(0.0, f64::max);
+        (log.glide_ratio_between(0.0, 20.0), worst_pitch.to_degrees())
+    };
+    for dx in [-0.05, 0.05] {
+        let (ratio, worst_pitch) = glide_with_com_shift(dx);
+        assert!(ratio < 1.5, "centre of mass {dx:+} m: glide ratio {ratio:.2}, still a glider");
+        assert!(worst_pitch > 45.0, "centre of mass {dx:+} m: worst pitch {worst_pitch:.0} deg");
+    }
+    for dx in [-0.005, 0.005] {
+        let (ratio, worst_pitch) = glide_with_com_shift(dx);
+        assert!((3.0..=7.0).contains(&ratio), "centre of mass {dx:+} m: glide ratio {ratio:.2}");
+        assert!(worst_pitch < 40.0, "centre of mass {dx:+} m: worst pitch {worst_pitch:.0} deg");
     }
 }

@@ -10,6 +10,7 @@
 //! - `env`, `vec_env`: one environment, and N of them stepped in parallel.
 
 pub mod action;
+pub mod benchmark;
 mod action_filter;
 pub mod config;
 mod control_loop;
