@@ -36,6 +36,19 @@ enum Command {
         #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
         tail_deg: f64,
     },
+    /// Show a reference trajectory (a name from the paper's results or your own CSV): write it
+    /// resampled at 50 Hz as CSV, with top and side views.
+    Reference {
+        /// A named reference (see --list) or a CSV file of time_s,x_m,y_m,z_m.
+        #[arg(required_unless_present = "list")]
+        reference: Option<String>,
+        /// List the named references and exit.
+        #[arg(long)]
+        list: bool,
+        /// Output directory (created if needed).
+        #[arg(long, default_value = "run/reference")]
+        out: PathBuf,
+    },
     /// Time MuJoCo steps and 20 ms control steps of this model on one thread.
     Bench {
         /// Number of timed blocks (the median over blocks is reported).
@@ -97,6 +110,7 @@ fn run(cli: Cli) -> Result<()> {
     };
     match cli.command {
         Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
+        Command::Reference { reference, list, out } => reference_command(reference.as_deref(), list, &out),
         Command::Bench { blocks, steps, envs, threads } => bench_command(&robot, blocks, steps, envs, threads),
     }
 }
@@ -156,5 +170,50 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, t
         println!("  raw MuJoCo bound     {raw:.0} control steps/s ({} threads x one-thread control step)", v.threads);
         println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
     }
+    Ok(())
+}
+
+fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<()> {
+    use flapper_task::reference::named::{NAMED_REFERENCES, named, reference_names};
+    if list {
+        for (name, what) in NAMED_REFERENCES {
+            println!("{name:<20} {what}");
+        }
+        return Ok(());
+    }
+    let Some(reference) = reference else { bail!("give a reference name or CSV file (or --list)") };
+    let dt_s = 0.02;
+    let lookahead = flapper_task::TaskConfig::default().observation.lookahead_steps;
+    let path = Path::new(reference);
+    let loaded = if reference.ends_with(".csv") || path.exists() {
+        flapper_task::reference::csv_file::load_reference_csv(path, dt_s, lookahead)?
+    } else {
+        named(reference, flapper_sim::Vec3::new(0.0, 0.0, 10.0), dt_s, 0.0).with_context(|| {
+            format!("unknown reference '{reference}' (named: {}; or a .csv file)", reference_names().join(", "))
+        })?
+    };
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    let csv_path = out.join("reference.csv");
+    let mut text = String::from("time_s,x_m,y_m,z_m\n");
+    for (k, p) in loaded.points().iter().enumerate() {
+        text.push_str(&format!("{:.3},{:.4},{:.4},{:.4}\n", k as f64 * dt_s, p.x, p.y, p.z));
+    }
+    std::fs::write(&csv_path, text).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
+    let plot = out.join("reference.svg");
+    flapper_eval::write_path_views(loaded.points(), loaded.name(), &plot)?;
+    let speeds: Vec<f64> = (0..loaded.len() - 1).map(|k| loaded.speed(k)).collect();
+    let (z_min, z_max) = loaded.points().iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.z), hi.max(p.z)));
+    println!(
+        "{}: {:.2} s, {} points at 50 Hz, speed {:.2}-{:.2} m/s, altitude {:.2}-{:.2} m",
+        loaded.name(),
+        loaded.duration_s(),
+        loaded.len(),
+        speeds.iter().copied().fold(f64::MAX, f64::min),
+        speeds.iter().copied().fold(f64::MIN, f64::max),
+        z_min,
+        z_max
+    );
+    println!("wrote {}", csv_path.display());
+    println!("wrote {}", plot.display());
     Ok(())
 }

@@ -87,3 +87,29 @@ fn bench_prints_microseconds_per_step() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("mj_step") && stdout.contains("control step"), "{stdout}");
 }
+
+#[test]
+fn reference_by_name_writes_csv_and_views() {
+    let out = scratch("reference");
+    let output = flapper(&["reference", "loop", "--out", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let csv = std::fs::read_to_string(out.join("reference.csv")).unwrap();
+    assert_eq!(csv.lines().next(), Some("time_s,x_m,y_m,z_m"));
+    assert_eq!(csv.lines().count(), 1 + 451, "9 s at 50 Hz plus the start");
+    assert!(std::fs::read_to_string(out.join("reference.svg")).unwrap().contains("<svg"));
+    let listed = flapper(&["reference", "--list"]);
+    let stdout = String::from_utf8_lossy(&listed.stdout);
+    for name in ["longitudinal", "lateral", "loop", "sharp-turn", "roll-off-the-bottom", "immelmann", "aerobatic"] {
+        assert!(stdout.contains(name), "{name} not listed");
+    }
+}
+
+#[test]
+fn unknown_reference_and_bad_csv_are_one_line_errors() {
+    assert_one_line_error(&flapper(&["reference", "barrel-roll"]), "barrel-roll");
+    let dir = scratch("bad-reference");
+    let file = dir.join("path.csv");
+    std::fs::write(&file, "t,x,y,z\n0,0,0,0\n0.5,1,0,inf\n1,2,0,0\n").unwrap();
+    assert_one_line_error(&flapper(&["reference", file.to_str().unwrap(), "--out", dir.to_str().unwrap()]), "line 3");
+    assert!(!dir.join("reference.csv").exists(), "nothing written for a rejected file");
+}

@@ -11,7 +11,7 @@ mod scripted;
 pub use controller::{Controller, FlightState, GlideController};
 pub use flight::{FlightSpec, fly, fly_simulator};
 pub use flight_log::{FlightLog, FlightRow, FlightSummary};
-pub use plots::write_flight_plots;
+pub use plots::{write_flight_plots, write_path_views};
 pub use scripted::{ScriptedGait, ScriptedGaitConfig};
 
 /// Writing results failed.

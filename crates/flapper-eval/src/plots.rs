@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use flapper_sim::ActuatedJoint;
+use flapper_sim::{ActuatedJoint, Vec3};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -20,7 +20,7 @@ struct Curve {
 
 /// A chart of curves sharing axes.
 struct Panel<'a> {
-    title: &'a str,
+    title: String,
     x_label: &'a str,
     y_label: &'a str,
     curves: Vec<Curve>,
@@ -38,14 +38,14 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
     let curve = |label: &str, points, color, dashed| Curve { label: label.to_owned(), points, color, dashed };
 
     let altitude = Panel {
-        title: &format!("{title}: altitude"),
+        title: format!("{title}: altitude"),
         x_label: "time (s)",
         y_label: "altitude (m)",
         curves: vec![curve("z", series(&|r| (r.state.time_s, r.state.position_m.z)), COLORS[0], false)],
         equal_aspect: false,
     };
     let speed = Panel {
-        title: "speed",
+        title: "speed".into(),
         x_label: "time (s)",
         y_label: "speed (m/s)",
         curves: vec![
@@ -61,7 +61,7 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
     let t_end = rows.last().map_or(0.0, |r| r.state.time_s);
     let window: Vec<_> = rows.iter().filter(|r| r.state.time_s >= t_end - 1.0).collect();
     let joint_panel = |title: &'static str, joints: &[ActuatedJoint]| Panel {
-        title,
+        title: title.into(),
         x_label: "time (s)",
         y_label: "angle (deg)",
         curves: joints
@@ -92,14 +92,14 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
     )?;
 
     let top = Panel {
-        title: "top view",
+        title: "top view".into(),
         x_label: "x (m)",
         y_label: "y (m)",
         curves: vec![curve("path", series(&|r| (r.state.position_m.x, r.state.position_m.y)), COLORS[0], false)],
         equal_aspect: true,
     };
     let side = Panel {
-        title: "side view",
+        title: "side view".into(),
         x_label: "x (m)",
         y_label: "z (m)",
         curves: vec![curve("path", series(&|r| (r.state.position_m.x, r.state.position_m.z)), COLORS[0], false)],
@@ -108,6 +108,20 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
     let path_path = dir.join("path.svg");
     draw(&path_path, (1000, 800), &[top, side], (2, 1))?;
     Ok(vec![altitude_path, joints_path, path_path])
+}
+
+/// Writes the top (x-y) and side (x-z) views of a path of points to `path` (SVG).
+pub fn write_path_views(points: &[Vec3], title: &str, path: &Path) -> Result<(), OutputError> {
+    let view = |name: &str, pick: fn(&Vec3) -> (f64, f64), y_label: &'static str| Panel {
+        title: format!("{title}: {name}"),
+        x_label: "x (m)",
+        y_label,
+        curves: vec![Curve { label: "path".into(), points: points.iter().map(pick).collect(), color: COLORS[0], dashed: false }],
+        equal_aspect: true,
+    };
+    let top = view("top view", |p| (p.x, p.y), "y (m)");
+    let side = view("side view", |p| (p.x, p.z), "z (m)");
+    draw(path, (1000, 800), &[top, side], (2, 1))
 }
 
 fn draw(path: &Path, size: (u32, u32), panels: &[Panel], grid: (usize, usize)) -> Result<(), OutputError> {
@@ -144,7 +158,7 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
         (y0, y1) = (cy - 0.5 * scale * py, cy + 0.5 * scale * py);
     }
     let mut chart = ChartBuilder::on(area)
-        .caption(panel.title, ("sans-serif", 18))
+        .caption(&panel.title, ("sans-serif", 18))
         .margin(8)
         .x_label_area_size(35)
         .y_label_area_size(55)
