@@ -45,7 +45,11 @@ impl FlightVecEnv {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .map_err(|e| ModelError::InvalidValue { what: "threads".into(), value: threads.to_string(), why: leak(e.to_string()) })?;
+            .map_err(|e| ModelError::InvalidValue {
+                what: "threads".into(),
+                value: format!("{threads} ({e})"),
+                why: "could not start the worker threads",
+            })?;
         let mut vec_env = Self {
             envs,
             pool,
@@ -164,8 +168,4 @@ impl FlightVecEnv {
     pub fn envs_mut(&mut self) -> &mut [FlightEnv] {
         &mut self.envs
     }
-}
-
-fn leak(message: String) -> &'static str {
-    Box::leak(message.into_boxed_str())
 }
