@@ -1,0 +1,229 @@
+//! A multilayer perceptron with ELU hidden layers and a linear output, forward and backward by hand on
+//! [`matmul`]. Parameters live in one flat vector (for Adam, gradient clipping and checkpoints); each
+//! layer's weight is stored [out x in] row-major like PyTorch's `nn.Linear`, so exported tensors load
+//! in PyTorch unchanged.
+
+use std::ops::Range;
+
+use rand::Rng;
+
+use crate::fast_math::elu_in_place;
+use crate::matmul::{Product, matmul};
+
+/// One named parameter tensor inside the flat vector.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tensor {
+    /// `"{layer}.weight"` or `"{layer}.bias"`, as PyTorch names an `nn.Sequential` of Linear layers
+    /// (layer indices count the activations too: 0, 2, 4, ...).
+    pub name: String,
+    pub shape: Vec<usize>,
+    pub range: Range<usize>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mlp {
+    /// Input size, hidden sizes, output size.
+    sizes: Vec<usize>,
+    params: Vec<f32>,
+    tensors: Vec<Tensor>,
+}
+
+/// Scratch buffers for one batch: every layer's output (kept for the backward pass) and two deltas.
+#[derive(Debug, Clone, Default)]
+pub struct Workspace {
+    batch: usize,
+    input: Vec<f32>,
+    outputs: Vec<Vec<f32>>,
+    delta: Vec<f32>,
+    delta_next: Vec<f32>,
+}
+
+impl Mlp {
+    /// `sizes` = [input, hidden..., output]. Weights and biases are drawn as PyTorch's default
+    /// Linear initialization, U(-1/sqrt(fan_in), 1/sqrt(fan_in)); the output layer is scaled by
+    /// `output_gain` (small for a policy's mean).
+    pub fn new(sizes: &[usize], output_gain: f32, rng: &mut impl Rng) -> Self {
+        assert!(sizes.len() >= 2 && sizes.iter().all(|&s| s > 0), "an MLP needs an input and an output size");
+        let mut tensors = Vec::new();
+        let mut offset = 0;
+        for (layer, pair) in sizes.windows(2).enumerate() {
+            let (fan_in, fan_out) = (pair[0], pair[1]);
+            let index = 2 * layer;
+            tensors.push(Tensor { name: format!("{index}.weight"), shape: vec![fan_out, fan_in], range: offset..offset + fan_in * fan_out });
+            offset += fan_in * fan_out;
+            tensors.push(Tensor { name: format!("{index}.bias"), shape: vec![fan_out], range: offset..offset + fan_out });
+            offset += fan_out;
+        }
+        let mut params = vec![0.0; offset];
+        let layers = sizes.len() - 1;
+        for (layer, pair) in sizes.windows(2).enumerate() {
+            let bound = 1.0 / (pair[0] as f32).sqrt();
+            let gain = if layer + 1 == layers { output_gain } else { 1.0 };
+            for t in &tensors[2 * layer..2 * layer + 2] {
+                for p in &mut params[t.range.clone()] {
+                    *p = gain * rng.random_range(-bound..=bound);
+                }
+            }
+        }
+        Self { sizes: sizes.to_vec(), params, tensors }
+    }
+
+    pub fn sizes(&self) -> &[usize] {
+        &self.sizes
+    }
+
+    pub fn input_size(&self) -> usize {
+        self.sizes[0]
+    }
+
+    pub fn output_size(&self) -> usize {
+        *self.sizes.last().expect("at least two sizes")
+    }
+
+    pub fn params(&self) -> &[f32] {
+        &self.params
+    }
+
+    pub fn params_mut(&mut self) -> &mut [f32] {
+        &mut self.params
+    }
+
+    pub fn tensors(&self) -> &[Tensor] {
+        &self.tensors
+    }
+
+    /// Forward pass of `batch` rows of `input`; returns the output rows ([batch x output]).
+    pub fn forward<'w>(&self, input: &[f32], batch: usize, ws: &'w mut Workspace, threads: usize) -> &'w [f32] {
+        assert_eq!(input.len(), batch * self.input_size(), "input is not {batch} x {}", self.input_size());
+        let layers = self.sizes.len() - 1;
+        ws.batch = batch;
+        ws.input.clear();
+        ws.input.extend_from_slice(input);
+        ws.outputs.resize_with(layers, Vec::new);
+        for layer in 0..layers {
+            let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
+            let (weight, bias) = (&self.tensors[2 * layer].range, &self.tensors[2 * layer + 1].range);
+            let (before, rest) = ws.outputs.split_at_mut(layer);
+            let previous: &[f32] = if layer == 0 { &ws.input } else { &before[layer - 1] };
+            let out = &mut rest[0];
+            out.resize(batch * fan_out, 0.0);
+            // Start from the bias, then add x W^T.
+            for row in out.chunks_exact_mut(fan_out) {
+                row.copy_from_slice(&self.params[bias.clone()]);
+            }
+            let how = Product { a_transposed: false, b_transposed: true, accumulate: true };
+            matmul(out, previous, &self.params[weight.clone()], batch, fan_out, fan_in, how, threads);
+            if layer + 1 < layers {
+                elu_in_place(out);
+            }
+        }
+        &ws.outputs[layers - 1]
+    }
+
+    /// Backward pass for the batch of the last `forward` on `ws`, given the loss gradient with respect
+    /// to the outputs. Writes the gradient of every parameter into `grads` (same layout as `params`).
+    pub fn backward(&self, ws: &mut Workspace, d_output: &[f32], grads: &mut [f32], threads: usize) {
+        let batch = ws.batch;
+        let layers = self.sizes.len() - 1;
+        assert_eq!(d_output.len(), batch * self.output_size());
+        assert_eq!(grads.len(), self.params.len());
+        ws.delta.clear();
+        ws.delta.extend_from_slice(d_output);
+        for layer in (0..layers).rev() {
+            let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
+            let (weight, bias) = (self.tensors[2 * layer].range.clone(), self.tensors[2 * layer + 1].range.clone());
+            let previous: &[f32] = if layer == 0 { &ws.input } else { &ws.outputs[layer - 1] };
+            // dW [out x in] = delta^T [out x batch] * previous [batch x in]
+            let how = Product { a_transposed: true, b_transposed: false, accumulate: false };
+            matmul(&mut grads[weight.clone()], &ws.delta, previous, fan_out, fan_in, batch, how, threads);
+            let d_bias = &mut grads[bias];
+            d_bias.fill(0.0);
+            for row in ws.delta.chunks_exact(fan_out) {
+                for (g, d) in d_bias.iter_mut().zip(row) {
+                    *g += d;
+                }
+            }
+            if layer > 0 {
+                // delta_prev [batch x in] = delta [batch x out] * W [out x in], times ELU'(z) = 1 or h + 1.
+                ws.delta_next.resize(batch * fan_in, 0.0);
+                matmul(&mut ws.delta_next, &ws.delta, &self.params[weight], batch, fan_in, fan_out, Product::PLAIN, threads);
+                for (d, &h) in ws.delta_next.iter_mut().zip(previous) {
+                    if h <= 0.0 {
+                        *d *= h + 1.0;
+                    }
+                }
+                std::mem::swap(&mut ws.delta, &mut ws.delta_next);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// Loss = sum(c * y) for fixed random c, in f64.
+    fn loss(net: &Mlp, x: &[f32], batch: usize, c: &[f32]) -> f64 {
+        let mut ws = Workspace::default();
+        net.forward(x, batch, &mut ws, 1).iter().zip(c).map(|(y, c)| (*y as f64) * (*c as f64)).sum()
+    }
+
+    #[test]
+    fn gradients_match_finite_differences_for_every_tensor() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut net = Mlp::new(&[6, 8, 5, 3], 1.0, &mut rng);
+        let batch = 4;
+        let x: Vec<f32> = (0..batch * 6).map(|_| rng.random_range(-1.5..1.5)).collect();
+        let c: Vec<f32> = (0..batch * 3).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut ws = Workspace::default();
+        net.forward(&x, batch, &mut ws, 1);
+        let mut grads = vec![0.0; net.params().len()];
+        net.backward(&mut ws, &c, &mut grads, 1);
+        let eps = 1e-2f32;
+        for tensor in net.tensors().to_vec() {
+            let mut worst: f64 = 0.0;
+            for i in tensor.range.clone() {
+                let original = net.params()[i];
+                net.params_mut()[i] = original + eps;
+                let up = loss(&net, &x, batch, &c);
+                net.params_mut()[i] = original - eps;
+                let down = loss(&net, &x, batch, &c);
+                net.params_mut()[i] = original;
+                let numeric = (up - down) / (2.0 * eps as f64);
+                let error = (numeric - grads[i] as f64).abs() / (1e-2 + numeric.abs().max((grads[i] as f64).abs()));
+                worst = worst.max(error);
+            }
+            assert!(worst < 2e-2, "{}: worst relative gradient error {worst:.2e}", tensor.name);
+        }
+    }
+
+    #[test]
+    fn layout_follows_pytorch_linear_layers() {
+        let net = Mlp::new(&[540, 256, 128, 64, 5], 0.01, &mut ChaCha8Rng::seed_from_u64(0));
+        let names: Vec<_> = net.tensors().iter().map(|t| (t.name.as_str(), t.shape.clone())).collect();
+        assert_eq!(names[0], ("0.weight", vec![256, 540]));
+        assert_eq!(names[1], ("0.bias", vec![256]));
+        assert_eq!(names[6], ("6.weight", vec![5, 64]));
+        assert_eq!(net.params().len(), 540 * 256 + 256 + 256 * 128 + 128 + 128 * 64 + 64 + 64 * 5 + 5);
+        let output = &net.params()[net.tensors()[6].range.clone()];
+        assert!(output.iter().all(|w| w.abs() <= 0.01 / 8.0 + 1e-9), "output gain applied");
+    }
+
+    #[test]
+    fn batched_forward_equals_row_by_row_and_threads_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let net = Mlp::new(&[10, 16, 4], 1.0, &mut rng);
+        let x: Vec<f32> = (0..7 * 10).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut ws = Workspace::default();
+        let all = net.forward(&x, 7, &mut ws, 2).to_vec();
+        for (row, expected) in x.chunks(10).zip(all.chunks(4)) {
+            let mut single = Workspace::default();
+            let y = net.forward(row, 1, &mut single, 1);
+            for (a, b) in y.iter().zip(expected) {
+                assert!((a - b).abs() < 1e-5);
+            }
+        }
+    }
+}
