@@ -4,6 +4,7 @@
 //! differences.
 
 pub mod adam;
+pub mod benchmark;
 pub mod fast_math;
 pub mod matmul;
 pub mod mlp;
