@@ -91,22 +91,9 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
         (3, 1),
     )?;
 
-    let top = Panel {
-        title: "top view".into(),
-        x_label: "x (m)",
-        y_label: "y (m)",
-        curves: vec![curve("path", series(&|r| (r.state.position_m.x, r.state.position_m.y)), COLORS[0], false)],
-        equal_aspect: true,
-    };
-    let side = Panel {
-        title: "side view".into(),
-        x_label: "x (m)",
-        y_label: "z (m)",
-        curves: vec![curve("path", series(&|r| (r.state.position_m.x, r.state.position_m.z)), COLORS[0], false)],
-        equal_aspect: true,
-    };
     let path_path = dir.join("path.svg");
-    draw(&path_path, (1000, 800), &[top, side], (2, 1))?;
+    let positions: Vec<Vec3> = rows.iter().map(|r| r.state.position_m).collect();
+    write_path_views(&positions, title, &path_path)?;
     Ok(vec![altitude_path, joints_path, path_path])
 }
 

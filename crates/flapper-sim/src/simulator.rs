@@ -328,13 +328,18 @@ impl Simulator {
         let (mass, inertia, com) = (nominal.body_mass(), nominal.body_inertia(), nominal.body_ipos());
         let (damping, fluid, wind) = (nominal.dof_damping(), nominal.geom_fluid(), nominal.opt().wind);
         let model = self.edit_model();
-        model.body_mass_mut().copy_from_slice(mass);
-        model.body_inertia_mut().copy_from_slice(inertia);
-        model.body_ipos_mut().copy_from_slice(com);
+        // Only mass, inertia and centre-of-mass changes need MuJoCo's constants recomputed at reset.
+        let inertial_changed =
+            model.body_mass() != mass || model.body_inertia() != inertia || model.body_ipos() != com;
+        if inertial_changed {
+            model.body_mass_mut().copy_from_slice(mass);
+            model.body_inertia_mut().copy_from_slice(inertia);
+            model.body_ipos_mut().copy_from_slice(com);
+        }
         model.dof_damping_mut().copy_from_slice(damping);
         model.geom_fluid_mut().copy_from_slice(fluid);
         model.opt_mut().wind = wind;
-        self.constants_stale = true;
+        self.constants_stale |= inertial_changed;
     }
 
     /// The model this instance simulates, with its edits (read-only).

@@ -33,12 +33,14 @@ pub fn time_vec_env(
     let mut vec_env = FlightVecEnv::new(robot, TaskConfig::default(), ReferenceSource::Procedural, envs, 0, threads)?;
     let mut rates = Vec::with_capacity(blocks);
     let mut step = 0usize;
+    let mut actions = vec![0.0f32; envs * 5];
     for _ in 0..blocks.max(1) {
         let began = Instant::now();
         for _ in 0..steps_per_block {
             let flap = (step as f32 * 0.02 * 5.3 * std::f32::consts::TAU).sin() * 0.33;
-            let action = [flap, 0.0, flap, 0.0, -0.5];
-            let actions: Vec<f32> = (0..envs).flat_map(|_| action).collect();
+            for action in actions.chunks_exact_mut(5) {
+                action.copy_from_slice(&[flap, 0.0, flap, 0.0, -0.5]);
+            }
             vec_env.step(&actions)?;
             vec_env.take_finished_episodes();
             step += 1;
