@@ -9,6 +9,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots};
 use flapper_sim::RobotModel;
 
+mod train;
+
 #[derive(Parser)]
 #[command(name = "flapper", version, about = "Learning-based trajectory tracking for a bird-inspired flapping-wing robot")]
 struct Cli {
@@ -47,6 +49,47 @@ enum Command {
         list: bool,
         /// Output directory (created if needed).
         #[arg(long, default_value = "run/reference")]
+        out: PathBuf,
+    },
+    /// Train a flight controller with PPO: a progress bar, one CSV row per iteration, learning curves,
+    /// checkpoints every few iterations, and the final policy, all in --out.
+    Train {
+        /// Run configuration (TOML with [runner], [ppo] and [task] tables; every key optional).
+        #[arg(long, value_name = "TOML")]
+        config: Option<PathBuf>,
+        /// Curriculum stage 1-4 (replaces the config's task.stage).
+        #[arg(long)]
+        stage: Option<i64>,
+        /// Run folder (created; must not hold a run unless --resume).
+        #[arg(long)]
+        out: PathBuf,
+        /// Continue the run in --out from its latest checkpoint, with the config it started with.
+        #[arg(long, conflicts_with_all = ["config", "stage", "init_from", "seed"])]
+        resume: bool,
+        /// Start from this policy or checkpoint (e.g. the previous stage's policy.safetensors).
+        #[arg(long, value_name = "FILE")]
+        init_from: Option<PathBuf>,
+        /// Number of PPO iterations (replaces runner.iterations; with --resume, raises the target).
+        #[arg(long)]
+        iterations: Option<usize>,
+        /// Random seed (replaces runner.seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Parallel environments (replaces runner.envs).
+        #[arg(long)]
+        envs: Option<usize>,
+    },
+    /// Check the learner on the inverted pendulum (Gymnasium's InvertedPendulum): train one run per
+    /// seed until the mean policy holds the pole for 1000 steps, and report the steps it took.
+    Pendulum {
+        /// Seeds to train (one run each).
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5")]
+        seeds: Vec<u64>,
+        /// Give up after this many iterations (64 environments x 24 steps each).
+        #[arg(long, default_value_t = 400)]
+        max_iterations: usize,
+        /// Output folder (one run folder per seed; replaced if it exists).
+        #[arg(long, default_value = "run/pendulum")]
         out: PathBuf,
     },
     /// Time MuJoCo steps and 20 ms control steps of this model on one thread.
@@ -112,6 +155,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
         Command::Reference { reference, list, out } => reference_command(reference.as_deref(), list, &out),
         Command::Bench { blocks, steps, envs, threads } => bench_command(&robot, blocks, steps, envs, threads),
+        Command::Train { config, stage, out, resume, init_from, iterations, seed, envs } => {
+            let overrides = train::Overrides { iterations, seed, envs };
+            train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)
+        }
+        Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }
 

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::adam::Adam;
-use crate::mlp::{Mlp, Workspace};
+use crate::mlp::{Activation, Mlp, Workspace};
 
 #[derive(Debug, Clone)]
 pub struct NetworkThroughput {
@@ -20,8 +20,8 @@ pub struct NetworkThroughput {
 
 pub fn time_actor_critic_update(observation_size: usize, minibatch: usize, threads: usize, repeats: usize) -> NetworkThroughput {
     let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let mut actor = Mlp::new(&[observation_size, 256, 128, 64, 5], 0.01, &mut rng);
-    let mut critic = Mlp::new(&[observation_size, 256, 128, 64, 1], 1.0, &mut rng);
+    let mut actor = Mlp::new(&[observation_size, 256, 128, 64, 5], Activation::Elu, 0.01, &mut rng);
+    let mut critic = Mlp::new(&[observation_size, 256, 128, 64, 1], Activation::Elu, 1.0, &mut rng);
     let (mut actor_adam, mut critic_adam) = (Adam::new(actor.params().len(), 1e-3), Adam::new(critic.params().len(), 1e-3));
     let (mut actor_grads, mut critic_grads) = (vec![0.0; actor.params().len()], vec![0.0; critic.params().len()]);
     let input: Vec<f32> = (0..minibatch * observation_size).map(|_| rng.random_range(-1.0..1.0)).collect();

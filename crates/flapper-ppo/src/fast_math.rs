@@ -32,6 +32,13 @@ pub fn elu_in_place(values: &mut [f32]) {
     }
 }
 
+/// tanh in place, as 1 - 2 / (e^(2x) + 1) on the vectorizable exp.
+pub fn tanh_in_place(values: &mut [f32]) {
+    for v in values {
+        *v = 1.0 - 2.0 / (exp_approx(2.0 * *v) + 1.0);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -47,6 +54,16 @@ mod tests {
         assert!(worst < 5e-6, "worst relative error {worst}");
         assert_eq!(exp_approx(0.0), 1.0);
         assert!(exp_approx(-200.0) >= 0.0 && exp_approx(-200.0) < 1e-37);
+    }
+
+    #[test]
+    fn tanh_matches_libm() {
+        let mut v: Vec<f32> = (-2000..=2000).map(|i| i as f32 * 5e-3).collect();
+        let exact: Vec<f32> = v.iter().map(|x| x.tanh()).collect();
+        tanh_in_place(&mut v);
+        for (a, b) in v.iter().zip(&exact) {
+            assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+        }
     }
 
     #[test]

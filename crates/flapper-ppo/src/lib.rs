@@ -1,10 +1,30 @@
-//! The learner: PPO (Schulman et al. 2017) on the CPU. It drives any vectorized environment and knows
-//! nothing of wings. So far: the network maths, written by hand on `gemm` for throughput
-//! (`matmul`, `fast_math`, `mlp`) and the Adam optimizer (`adam`), each checked against finite
-//! differences.
+//! The learner: PPO (Schulman et al. 2017) on the CPU. It drives any [`vec_env::VecEnv`] and knows
+//! nothing of wings. The flow of one iteration, file by file:
+//!
+//! - `vec_env`: the interface every batch of environments implements;
+//! - `normalizer`, `actor_critic`: the policy (observation statistics, actor, log-std, critic), built
+//!   on `mlp` (forward and backward by hand on `matmul`/gemm, `fast_math` for the activations);
+//! - `storage`: the rollout and its generalized advantages;
+//! - `ppo`: acting, bootstrapping truncated episodes, the clipped loss and its gradients, `adam`;
+//! - `runner`: iterations, CSV log, `checkpoint`s, `curves`; `config`: every setting, rsl_rl's defaults.
 
+pub mod actor_critic;
 pub mod adam;
 pub mod benchmark;
+pub mod checkpoint;
+pub mod config;
+pub mod curves;
+pub mod evaluate;
 pub mod fast_math;
 pub mod matmul;
 pub mod mlp;
+pub mod normalizer;
+pub mod ppo;
+pub mod runner;
+pub mod storage;
+pub mod vec_env;
+
+pub use actor_critic::{ActorCritic, InferenceScratch};
+pub use config::{PpoConfig, RunnerConfig, Schedule};
+pub use runner::{IterationLog, Start, TrainError, Trainer};
+pub use vec_env::{EnvError, EpisodeRecord, VecEnv};

@@ -1,4 +1,4 @@
-//! A multilayer perceptron with ELU hidden layers and a linear output, forward and backward by hand on
+//! A multilayer perceptron with ELU (or tanh) hidden layers and a linear output, forward and backward by hand on
 //! [`matmul`]. Parameters live in one flat vector (for Adam, gradient clipping and checkpoints); each
 //! layer's weight is stored [out x in] row-major like PyTorch's `nn.Linear`, so exported tensors load
 //! in PyTorch unchanged.
@@ -7,7 +7,9 @@ use std::ops::Range;
 
 use rand::Rng;
 
-use crate::fast_math::elu_in_place;
+use serde::{Deserialize, Serialize};
+
+use crate::fast_math::{elu_in_place, tanh_in_place};
 use crate::matmul::{Product, matmul};
 
 /// One named parameter tensor inside the flat vector.
@@ -20,10 +22,40 @@ pub struct Tensor {
     pub range: Range<usize>,
 }
 
+/// The hidden layers' nonlinearity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Activation {
+    Elu,
+    Tanh,
+}
+
+impl Activation {
+    fn apply(self, values: &mut [f32]) {
+        match self {
+            Self::Elu => elu_in_place(values),
+            Self::Tanh => tanh_in_place(values),
+        }
+    }
+
+    /// Multiplies each `delta` by the derivative at the point whose activation output is `h`.
+    fn backpropagate(self, delta: &mut [f32], outputs: &[f32]) {
+        match self {
+            Self::Elu => delta.iter_mut().zip(outputs).for_each(|(d, &h)| {
+                if h <= 0.0 {
+                    *d *= h + 1.0;
+                }
+            }),
+            Self::Tanh => delta.iter_mut().zip(outputs).for_each(|(d, &h)| *d *= 1.0 - h * h),
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mlp {
     /// Input size, hidden sizes, output size.
     sizes: Vec<usize>,
+    activation: Activation,
     params: Vec<f32>,
     tensors: Vec<Tensor>,
 }
@@ -42,19 +74,10 @@ impl Mlp {
     /// `sizes` = [input, hidden..., output]. Weights and biases are drawn as PyTorch's default
     /// Linear initialization, U(-1/sqrt(fan_in), 1/sqrt(fan_in)); the output layer is scaled by
     /// `output_gain` (small for a policy's mean).
-    pub fn new(sizes: &[usize], output_gain: f32, rng: &mut impl Rng) -> Self {
+    pub fn new(sizes: &[usize], activation: Activation, output_gain: f32, rng: &mut impl Rng) -> Self {
         assert!(sizes.len() >= 2 && sizes.iter().all(|&s| s > 0), "an MLP needs an input and an output size");
-        let mut tensors = Vec::new();
-        let mut offset = 0;
-        for (layer, pair) in sizes.windows(2).enumerate() {
-            let (fan_in, fan_out) = (pair[0], pair[1]);
-            let index = 2 * layer;
-            tensors.push(Tensor { name: format!("{index}.weight"), shape: vec![fan_out, fan_in], range: offset..offset + fan_in * fan_out });
-            offset += fan_in * fan_out;
-            tensors.push(Tensor { name: format!("{index}.bias"), shape: vec![fan_out], range: offset..offset + fan_out });
-            offset += fan_out;
-        }
-        let mut params = vec![0.0; offset];
+        let tensors = tensor_layout(sizes);
+        let mut params = vec![0.0; tensors.last().map_or(0, |t| t.range.end)];
         let layers = sizes.len() - 1;
         for (layer, pair) in sizes.windows(2).enumerate() {
             let bound = 1.0 / (pair[0] as f32).sqrt();
@@ -65,11 +88,26 @@ impl Mlp {
                 }
             }
         }
-        Self { sizes: sizes.to_vec(), params, tensors }
+        Self { sizes: sizes.to_vec(), activation, params, tensors }
+    }
+
+    /// An MLP with the given parameters (as `params()` returns them); `None` if their count does not
+    /// match the sizes.
+    pub fn with_params(sizes: &[usize], activation: Activation, params: Vec<f32>) -> Option<Self> {
+        if sizes.len() < 2 || sizes.contains(&0) {
+            return None;
+        }
+        let tensors = tensor_layout(sizes);
+        (tensors.last().map_or(0, |t| t.range.end) == params.len())
+            .then(|| Self { sizes: sizes.to_vec(), activation, params, tensors })
     }
 
     pub fn sizes(&self) -> &[usize] {
         &self.sizes
+    }
+
+    pub fn activation(&self) -> Activation {
+        self.activation
     }
 
     pub fn input_size(&self) -> usize {
@@ -114,7 +152,7 @@ impl Mlp {
             let how = Product { a_transposed: false, b_transposed: true, accumulate: true };
             matmul(out, previous, &self.params[weight.clone()], batch, fan_out, fan_in, how, threads);
             if layer + 1 < layers {
-                elu_in_place(out);
+                self.activation.apply(out);
             }
         }
         &ws.outputs[layers - 1]
@@ -144,18 +182,29 @@ impl Mlp {
                 }
             }
             if layer > 0 {
-                // delta_prev [batch x in] = delta [batch x out] * W [out x in], times ELU'(z) = 1 or h + 1.
+                // delta_prev [batch x in] = delta [batch x out] * W [out x in], times the activation's slope.
                 ws.delta_next.resize(batch * fan_in, 0.0);
                 matmul(&mut ws.delta_next, &ws.delta, &self.params[weight], batch, fan_in, fan_out, Product::PLAIN, threads);
-                for (d, &h) in ws.delta_next.iter_mut().zip(previous) {
-                    if h <= 0.0 {
-                        *d *= h + 1.0;
-                    }
-                }
+                self.activation.backpropagate(&mut ws.delta_next, previous);
                 std::mem::swap(&mut ws.delta, &mut ws.delta_next);
             }
         }
     }
+}
+
+/// Weight and bias of each layer, in order, inside one flat vector.
+fn tensor_layout(sizes: &[usize]) -> Vec<Tensor> {
+    let mut tensors = Vec::new();
+    let mut offset = 0;
+    for (layer, pair) in sizes.windows(2).enumerate() {
+        let (fan_in, fan_out) = (pair[0], pair[1]);
+        let index = 2 * layer;
+        tensors.push(Tensor { name: format!("{index}.weight"), shape: vec![fan_out, fan_in], range: offset..offset + fan_in * fan_out });
+        offset += fan_in * fan_out;
+        tensors.push(Tensor { name: format!("{index}.bias"), shape: vec![fan_out], range: offset..offset + fan_out });
+        offset += fan_out;
+    }
+    tensors
 }
 
 #[cfg(test)]
@@ -172,8 +221,14 @@ mod tests {
 
     #[test]
     fn gradients_match_finite_differences_for_every_tensor() {
+        for activation in [Activation::Elu, Activation::Tanh] {
+            check_gradients(activation);
+        }
+    }
+
+    fn check_gradients(activation: Activation) {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let mut net = Mlp::new(&[6, 8, 5, 3], 1.0, &mut rng);
+        let mut net = Mlp::new(&[6, 8, 5, 3], activation, 1.0, &mut rng);
         let batch = 4;
         let x: Vec<f32> = (0..batch * 6).map(|_| rng.random_range(-1.5..1.5)).collect();
         let c: Vec<f32> = (0..batch * 3).map(|_| rng.random_range(-1.0..1.0)).collect();
@@ -195,13 +250,13 @@ mod tests {
                 let error = (numeric - grads[i] as f64).abs() / (1e-2 + numeric.abs().max((grads[i] as f64).abs()));
                 worst = worst.max(error);
             }
-            assert!(worst < 2e-2, "{}: worst relative gradient error {worst:.2e}", tensor.name);
+            assert!(worst < 2e-2, "{activation:?} {}: worst relative gradient error {worst:.2e}", tensor.name);
         }
     }
 
     #[test]
     fn layout_follows_pytorch_linear_layers() {
-        let net = Mlp::new(&[540, 256, 128, 64, 5], 0.01, &mut ChaCha8Rng::seed_from_u64(0));
+        let net = Mlp::new(&[540, 256, 128, 64, 5], Activation::Elu, 0.01, &mut ChaCha8Rng::seed_from_u64(0));
         let names: Vec<_> = net.tensors().iter().map(|t| (t.name.as_str(), t.shape.clone())).collect();
         assert_eq!(names[0], ("0.weight", vec![256, 540]));
         assert_eq!(names[1], ("0.bias", vec![256]));
@@ -214,7 +269,7 @@ mod tests {
     #[test]
     fn batched_forward_equals_row_by_row_and_threads_agree() {
         let mut rng = ChaCha8Rng::seed_from_u64(9);
-        let net = Mlp::new(&[10, 16, 4], 1.0, &mut rng);
+        let net = Mlp::new(&[10, 16, 4], Activation::Elu, 1.0, &mut rng);
         let x: Vec<f32> = (0..7 * 10).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut ws = Workspace::default();
         let all = net.forward(&x, 7, &mut ws, 2).to_vec();

@@ -103,6 +103,13 @@ impl FlightEnv {
         Ok(env)
     }
 
+    /// Reseeds the random stream from (`seed`, this environment's index) and starts a new episode.
+    pub fn restart(&mut self, seed: u64) -> Result<(), ModelError> {
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
+        self.rng.set_stream(self.index as u64);
+        self.reset()
+    }
+
     pub fn observation_layout(&self) -> ObservationLayout {
         self.observation.layout()
     }

@@ -19,6 +19,8 @@ pub struct FlightVecEnv {
     pool: rayon::ThreadPool,
     observation_size: usize,
     observations: Vec<f32>,
+    /// Last observation of each episode truncated at the last step (other rows stale).
+    final_observations: Vec<f32>,
     rewards: Vec<f32>,
     terminated: Vec<bool>,
     truncated: Vec<bool>,
@@ -55,6 +57,7 @@ impl FlightVecEnv {
             pool,
             observation_size,
             observations: vec![0.0; count * observation_size],
+            final_observations: vec![0.0; count * observation_size],
             rewards: vec![0.0; count],
             terminated: vec![false; count],
             truncated: vec![false; count],
@@ -99,17 +102,20 @@ impl FlightVecEnv {
             self.envs
                 .par_iter_mut()
                 .zip(actions.par_chunks(ACTION_SIZE))
-                .zip(self.observations.par_chunks_mut(size))
+                .zip(self.observations.par_chunks_mut(size).zip(self.final_observations.par_chunks_mut(size)))
                 .zip(self.rewards.par_iter_mut())
                 .zip(self.terminated.par_iter_mut().zip(self.truncated.par_iter_mut()))
                 .zip(self.terms.par_iter_mut())
-                .map(|(((((env, action), out), reward), (terminated, truncated)), terms)| {
+                .map(|(((((env, action), (out, final_out)), reward), (terminated, truncated)), terms)| {
                     let result = env.step(action);
                     *reward = result.reward as f32;
                     *terms = result.terms;
                     *terminated = result.end.is_some_and(EpisodeEnd::is_termination);
                     *truncated = result.end.is_some_and(|e| !e.is_termination());
                     let info = result.end.map(|end| env.episode_info(end));
+                    if *truncated {
+                        env.observe(final_out);
+                    }
                     if info.is_some() {
                         env.reset()?;
                     }
@@ -127,6 +133,21 @@ impl FlightVecEnv {
             }
         }
         Ok(())
+    }
+
+    /// Starts a new episode in every environment with its random stream drawn afresh from (`seed`,
+    /// its index), as if the batch had just been built with `seed`.
+    pub fn restart(&mut self, seed: u64) -> Result<(), ModelError> {
+        self.pool.install(|| self.envs.par_iter_mut().try_for_each(|env| env.restart(seed)))?;
+        self.finished.clear();
+        self.observe_all();
+        Ok(())
+    }
+
+    /// For each environment truncated at the last step, its final observation before the reset
+    /// (for bootstrapping the value of the cut-off future). Rows of other environments are stale.
+    pub fn final_observations(&self) -> &[f32] {
+        &self.final_observations
     }
 
     /// Observations, `len() * observation_size()` numbers, environment by environment.

@@ -1,0 +1,174 @@
+//! The learner's settings, each named as in the literature and defaulting to rsl_rl's PPO values
+//! (Rudin et al. 2022), which the paper's training used. A TOML `[ppo]` / `[runner]` table overrides any.
+
+use serde::{Deserialize, Serialize};
+
+use crate::mlp::Activation;
+
+/// A setting no run could use, named with its value.
+#[derive(Debug, thiserror::Error)]
+#[error("config value {key} = {value}: {why}")]
+pub struct InvalidSetting {
+    pub key: &'static str,
+    pub value: String,
+    pub why: &'static str,
+}
+
+/// How the learning rate moves between updates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Schedule {
+    /// Fixed at `learning_rate`.
+    Fixed,
+    /// Divided by 1.5 when the KL of a minibatch exceeds 2 `desired_kl`, multiplied by 1.5 when
+    /// below half of it, within [1e-5, 1e-2].
+    Adaptive,
+}
+
+/// PPO (Schulman et al. 2017) and the actor-critic networks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PpoConfig {
+    /// Steps each environment collects per iteration (rollout length).
+    pub steps_per_env: usize,
+    /// Passes over each rollout.
+    pub epochs: usize,
+    /// Minibatches per pass.
+    pub minibatches: usize,
+    /// epsilon of the clipped surrogate (and of the clipped value loss).
+    pub clip: f32,
+    pub clipped_value_loss: bool,
+    pub value_loss_coef: f32,
+    pub entropy_coef: f32,
+    /// gamma, the discount per step.
+    pub gamma: f32,
+    /// lambda of generalized advantage estimation.
+    pub lambda: f32,
+    /// Global L2 norm the gradient is clipped to.
+    pub max_grad_norm: f32,
+    /// Adam's initial step size.
+    pub learning_rate: f32,
+    pub schedule: Schedule,
+    /// Target KL of the adaptive schedule.
+    pub desired_kl: f32,
+    /// Normalize advantages over each rollout to zero mean and unit variance.
+    pub normalize_advantages: bool,
+    pub actor_hidden: Vec<usize>,
+    pub critic_hidden: Vec<usize>,
+    pub activation: Activation,
+    /// Initial standard deviation of every action (the log-std is learned, state-independent).
+    pub init_noise_std: f32,
+}
+
+impl Default for PpoConfig {
+    fn default() -> Self {
+        Self {
+            steps_per_env: 24,
+            epochs: 5,
+            minibatches: 4,
+            clip: 0.2,
+            clipped_value_loss: true,
+            value_loss_coef: 1.0,
+            entropy_coef: 0.01,
+            gamma: 0.99,
+            lambda: 0.95,
+            max_grad_norm: 1.0,
+            learning_rate: 1e-3,
+            schedule: Schedule::Adaptive,
+            desired_kl: 0.01,
+            normalize_advantages: true,
+            actor_hidden: vec![256, 128, 64],
+            critic_hidden: vec![256, 128, 64],
+            activation: Activation::Elu,
+            init_noise_std: 1.0,
+        }
+    }
+}
+
+/// How long a run is, how many environments it drives, and how often it saves.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RunnerConfig {
+    /// Parallel environments (the paper: 256).
+    pub envs: usize,
+    /// PPO iterations; each collects `envs * steps_per_env` environment steps.
+    pub iterations: usize,
+    pub seed: u64,
+    /// Worker threads for environments and network maths (0 = one per core).
+    pub threads: usize,
+    /// Save a checkpoint every this many iterations (and at the end). Environments restart at each
+    /// checkpoint, so that resuming replays the uninterrupted run exactly.
+    pub checkpoint_every: usize,
+}
+
+impl Default for RunnerConfig {
+    fn default() -> Self {
+        Self { envs: 256, iterations: 1500, seed: 1, threads: 0, checkpoint_every: 50 }
+    }
+}
+
+impl PpoConfig {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        let invalid = |key, value: String, why| Err(InvalidSetting { key, value, why });
+        for (key, value) in [("ppo.steps_per_env", self.steps_per_env), ("ppo.epochs", self.epochs), ("ppo.minibatches", self.minibatches)] {
+            if value == 0 {
+                return invalid(key, "0".into(), "must be at least 1");
+            }
+        }
+        let positive = [
+            ("ppo.clip", self.clip),
+            ("ppo.max_grad_norm", self.max_grad_norm),
+            ("ppo.learning_rate", self.learning_rate),
+            ("ppo.desired_kl", self.desired_kl),
+            ("ppo.init_noise_std", self.init_noise_std),
+        ];
+        for (key, value) in positive {
+            if !(value > 0.0 && value.is_finite()) {
+                return invalid(key, value.to_string(), "must be positive");
+            }
+        }
+        for (key, value) in [("ppo.value_loss_coef", self.value_loss_coef), ("ppo.entropy_coef", self.entropy_coef)] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return invalid(key, value.to_string(), "must be finite and not negative");
+            }
+        }
+        for (key, value) in [("ppo.gamma", self.gamma), ("ppo.lambda", self.lambda)] {
+            if !(0.0..=1.0).contains(&value) {
+                return invalid(key, value.to_string(), "must be in [0, 1]");
+            }
+        }
+        for (key, sizes) in [("ppo.actor_hidden", &self.actor_hidden), ("ppo.critic_hidden", &self.critic_hidden)] {
+            if sizes.is_empty() || sizes.iter().any(|&s| s == 0 || s > 4096) {
+                return invalid(key, format!("{sizes:?}"), "needs at least one hidden layer, each of 1 to 4096 units");
+            }
+        }
+        Ok(())
+    }
+}
+
+impl RunnerConfig {
+    pub fn validate(&self, ppo: &PpoConfig) -> Result<(), InvalidSetting> {
+        let invalid = |key, value: String, why| Err(InvalidSetting { key, value, why });
+        if self.envs == 0 || self.envs > 65_536 {
+            return invalid("runner.envs", self.envs.to_string(), "must be 1 to 65536");
+        }
+        if self.iterations == 0 {
+            return invalid("runner.iterations", "0".into(), "must be at least 1");
+        }
+        if self.checkpoint_every == 0 {
+            return invalid("runner.checkpoint_every", "0".into(), "must be at least 1");
+        }
+        if self.threads > 1024 {
+            return invalid("runner.threads", self.threads.to_string(), "must be at most 1024 (0 = one per core)");
+        }
+        if self.envs * ppo.steps_per_env < ppo.minibatches {
+            return invalid("ppo.minibatches", ppo.minibatches.to_string(), "more minibatches than samples per rollout");
+        }
+        Ok(())
+    }
+
+    /// The number of threads to use: `threads`, or one per core when 0.
+    pub fn thread_count(&self) -> usize {
+        if self.threads > 0 { self.threads } else { std::thread::available_parallelism().map_or(1, |n| n.get()) }
+    }
+}

@@ -1,0 +1,542 @@
+//! PPO (Schulman et al. 2017) as rsl_rl runs it: act and record, bootstrap truncated episodes,
+//! generalized advantages, then `epochs` passes of `minibatches` clipped-surrogate updates with a
+//! clipped value loss, an entropy bonus, global gradient clipping, Adam, and the adaptive
+//! learning-rate schedule on the policy's KL divergence.
+
+use rand::Rng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
+use crate::adam::Adam;
+use crate::config::{PpoConfig, Schedule};
+use crate::mlp::Workspace;
+use crate::storage::RolloutStorage;
+
+/// Adam state for every parameter of the policy (one optimizer over all, as in rsl_rl, kept as
+/// three because the parameters live in three vectors).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Optimizer {
+    pub actor: Adam,
+    pub critic: Adam,
+    pub log_std: Adam,
+}
+
+/// Gradients of the loss, shaped like the parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gradients {
+    pub actor: Vec<f32>,
+    pub critic: Vec<f32>,
+    pub log_std: Vec<f32>,
+}
+
+impl Gradients {
+    pub fn zeros(policy: &ActorCritic) -> Self {
+        Self {
+            actor: vec![0.0; policy.actor.params().len()],
+            critic: vec![0.0; policy.critic.params().len()],
+            log_std: vec![0.0; policy.log_std.len()],
+        }
+    }
+
+    /// Scales all gradients together so their global L2 norm is at most `max_norm`; returns the norm
+    /// before clipping.
+    pub fn clip_global_norm(&mut self, max_norm: f32) -> f32 {
+        let squares: f64 =
+            [&self.actor, &self.critic, &self.log_std].iter().flat_map(|g| g.iter()).map(|&g| (g as f64) * (g as f64)).sum();
+        let norm = squares.sqrt() as f32;
+        if norm > max_norm {
+            let scale = max_norm / (norm + 1e-6);
+            for g in [&mut self.actor, &mut self.critic, &mut self.log_std] {
+                g.iter_mut().for_each(|x| *x *= scale);
+            }
+        }
+        norm
+    }
+}
+
+/// One minibatch of samples, gathered from the rollout.
+#[derive(Debug, Clone, Default)]
+pub struct Minibatch {
+    pub size: usize,
+    pub observations: Vec<f32>,
+    pub actions: Vec<f32>,
+    pub old_log_probs: Vec<f32>,
+    pub old_means: Vec<f32>,
+    /// log sigma of the policy that collected the samples.
+    pub old_log_std: Vec<f32>,
+    pub old_values: Vec<f32>,
+    pub advantages: Vec<f32>,
+    pub returns: Vec<f32>,
+}
+
+/// The loss of one minibatch and its parts.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LossTerms {
+    pub surrogate: f64,
+    pub value: f64,
+    /// Mean entropy of the action distribution.
+    pub entropy: f64,
+    /// Mean KL(pi_old || pi) over the minibatch.
+    pub kl: f64,
+    /// Fraction of samples whose ratio lies outside [1 - clip, 1 + clip].
+    pub clip_fraction: f64,
+    /// surrogate + value_loss_coef value - entropy_coef entropy.
+    pub total: f64,
+}
+
+/// Averages over an update's minibatches.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct UpdateStats {
+    pub surrogate_loss: f64,
+    pub value_loss: f64,
+    pub entropy: f64,
+    pub kl: f64,
+    pub clip_fraction: f64,
+    /// Gradient norm before clipping.
+    pub grad_norm: f64,
+    /// Learning rate after the update.
+    pub learning_rate: f64,
+    pub action_std: f64,
+}
+
+/// Scratch buffers of the loss computation.
+#[derive(Debug, Clone, Default)]
+pub struct LossScratch {
+    actor: Workspace,
+    critic: Workspace,
+    d_mean: Vec<f32>,
+    d_value: Vec<f32>,
+}
+
+/// The loss of `batch` under `policy` and its gradient with respect to every parameter (written into
+/// `grads`). The maths of PPO in one function, checked against finite differences in the tests.
+pub fn loss_and_gradients(
+    policy: &ActorCritic,
+    config: &PpoConfig,
+    batch: &Minibatch,
+    scratch: &mut LossScratch,
+    grads: &mut Gradients,
+    threads: usize,
+) -> LossTerms {
+    let (n, a_size) = (batch.size, policy.action_size());
+    let inv_n = 1.0 / n as f32;
+    let std: Vec<f32> = policy.log_std.iter().map(|s| s.exp()).collect();
+    let inv_var: Vec<f32> = std.iter().map(|s| 1.0 / (s * s)).collect();
+    let old_var: Vec<f32> = batch.old_log_std.iter().map(|s| (2.0 * s).exp()).collect();
+    let log_std_sum: f32 = policy.log_std.iter().sum();
+    let eps = config.clip;
+
+    let means = policy.actor.forward(&batch.observations, n, &mut scratch.actor, threads);
+    scratch.d_mean.resize(n * a_size, 0.0);
+    grads.log_std.iter_mut().for_each(|g| *g = 0.0);
+    let mut terms = LossTerms::default();
+    for i in 0..n {
+        let row = i * a_size..(i + 1) * a_size;
+        let (mu, action, old_mu) = (&means[row.clone()], &batch.actions[row.clone()], &batch.old_means[row.clone()]);
+        let mut log_prob = -log_std_sum - a_size as f32 * HALF_LN_2PI;
+        let mut kl = 0.0f32;
+        for j in 0..a_size {
+            let diff = action[j] - mu[j];
+            log_prob -= 0.5 * diff * diff * inv_var[j];
+            let mean_shift = old_mu[j] - mu[j];
+            kl += policy.log_std[j] - batch.old_log_std[j] + (old_var[j] + mean_shift * mean_shift) * 0.5 * inv_var[j] - 0.5;
+        }
+        let ratio = (log_prob - batch.old_log_probs[i]).exp();
+        let advantage = batch.advantages[i];
+        let unclipped = -advantage * ratio;
+        let clipped = -advantage * ratio.clamp(1.0 - eps, 1.0 + eps);
+        terms.surrogate += unclipped.max(clipped) as f64;
+        terms.kl += kl as f64;
+        if (ratio - 1.0).abs() > eps {
+            terms.clip_fraction += 1.0;
+        }
+        // d(surrogate)/d(log pi): the unclipped branch carries the gradient; the clipped one is flat.
+        let d_log_prob = if unclipped >= clipped { -advantage * ratio * inv_n } else { 0.0 };
+        for j in 0..a_size {
+            let diff = action[j] - mu[j];
+            scratch.d_mean[i * a_size + j] = d_log_prob * diff * inv_var[j];
+            grads.log_std[j] += d_log_prob * (diff * diff * inv_var[j] - 1.0);
+        }
+    }
+    // Entropy of a diagonal Gaussian: sum_j (log sigma_j + 1/2 + ln(2 pi)/2), the same for every sample.
+    let entropy = log_std_sum + a_size as f32 * (0.5 + HALF_LN_2PI);
+    for g in &mut grads.log_std {
+        *g -= config.entropy_coef;
+    }
+    policy.actor.backward(&mut scratch.actor, &scratch.d_mean, &mut grads.actor, threads);
+
+    let values = policy.critic.forward(&batch.observations, n, &mut scratch.critic, threads);
+    scratch.d_value.resize(n, 0.0);
+    for i in 0..n {
+        let (v, target, old) = (values[i], batch.returns[i], batch.old_values[i]);
+        let error = v - target;
+        let (loss, d_value) = if config.clipped_value_loss {
+            let clipped = old + (v - old).clamp(-eps, eps);
+            let clipped_error = clipped - target;
+            if error * error >= clipped_error * clipped_error {
+                (error * error, 2.0 * error)
+            } else {
+                let inside = ((v - old).abs() < eps) as u8 as f32;
+                (clipped_error * clipped_error, 2.0 * clipped_error * inside)
+            }
+        } else {
+            (error * error, 2.0 * error)
+        };
+        terms.value += loss as f64;
+        scratch.d_value[i] = config.value_loss_coef * d_value * inv_n;
+    }
+    policy.critic.backward(&mut scratch.critic, &scratch.d_value, &mut grads.critic, threads);
+
+    let n = n as f64;
+    terms.surrogate /= n;
+    terms.value /= n;
+    terms.kl /= n;
+    terms.clip_fraction /= n;
+    terms.entropy = entropy as f64;
+    terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value - config.entropy_coef as f64 * terms.entropy;
+    terms
+}
+
+/// The learner: policy, optimizer, learning rate, random stream and rollout storage.
+pub struct Ppo {
+    pub config: PpoConfig,
+    pub policy: ActorCritic,
+    pub optimizer: Optimizer,
+    pub learning_rate: f32,
+    /// Draws the exploration noise and the minibatch shuffles.
+    pub rng: ChaCha8Rng,
+    pub storage: RolloutStorage,
+    /// log sigma when the current rollout was collected.
+    rollout_log_std: Vec<f32>,
+    threads: usize,
+    normalized: Vec<f32>,
+    actor_ws: Workspace,
+    critic_ws: Workspace,
+    bootstrap_rows: Vec<f32>,
+    minibatch: Minibatch,
+    loss_scratch: LossScratch,
+    grads: Gradients,
+}
+
+impl Ppo {
+    pub fn new(policy: ActorCritic, config: PpoConfig, envs: usize, rng: ChaCha8Rng, threads: usize) -> Self {
+        let optimizer = Optimizer {
+            actor: Adam::new(policy.actor.params().len(), config.learning_rate),
+            critic: Adam::new(policy.critic.params().len(), config.learning_rate),
+            log_std: Adam::new(policy.log_std.len(), config.learning_rate),
+        };
+        let storage = RolloutStorage::new(config.steps_per_env, envs, policy.observation_size(), policy.action_size());
+        let grads = Gradients::zeros(&policy);
+        Self {
+            learning_rate: config.learning_rate,
+            rollout_log_std: policy.log_std.clone(),
+            config,
+            policy,
+            optimizer,
+            rng,
+            storage,
+            threads: threads.max(1),
+            normalized: Vec::new(),
+            actor_ws: Workspace::default(),
+            critic_ws: Workspace::default(),
+            bootstrap_rows: Vec::new(),
+            minibatch: Minibatch::default(),
+            loss_scratch: LossScratch::default(),
+            grads,
+        }
+    }
+
+    /// Records the observations of the current step (updating the normalizer), samples an action per
+    /// environment into `actions` and records it with its log-probability and the state value.
+    pub fn act(&mut self, observations: &[f32], actions: &mut [f32]) {
+        let (envs, a_size, o_size) = (self.storage.envs, self.policy.action_size(), self.policy.observation_size());
+        assert_eq!(observations.len(), envs * o_size);
+        assert_eq!(actions.len(), envs * a_size);
+        if self.storage.step() == 0 {
+            self.rollout_log_std.clone_from(&self.policy.log_std);
+        }
+        self.policy.normalizer.update(observations);
+        self.policy.normalizer.normalize(observations, &mut self.normalized);
+        let rows = self.storage.rows(self.storage.step());
+        let means = self.policy.actor.forward(&self.normalized, envs, &mut self.actor_ws, self.threads);
+        let values = self.policy.critic.forward(&self.normalized, envs, &mut self.critic_ws, self.threads);
+        let s = &mut self.storage;
+        s.observations[rows.start * o_size..rows.end * o_size].copy_from_slice(&self.normalized);
+        s.means[rows.start * a_size..rows.end * a_size].copy_from_slice(means);
+        s.values[rows.clone()].copy_from_slice(values);
+        let std: Vec<f32> = self.policy.log_std.iter().map(|l| l.exp()).collect();
+        let constant = -self.policy.log_std.iter().sum::<f32>() - a_size as f32 * HALF_LN_2PI;
+        for env in 0..envs {
+            let mut log_prob = constant;
+            for j in 0..a_size {
+                let noise: f32 = self.rng.sample(StandardNormal);
+                let k = env * a_size + j;
+                actions[k] = means[k] + std[j] * noise;
+                log_prob -= 0.5 * noise * noise;
+            }
+            s.log_probs[rows.start + env] = log_prob;
+        }
+        s.actions[rows.start * a_size..rows.end * a_size].copy_from_slice(actions);
+    }
+
+    /// Records the environments' answer to the last `act`. A truncated episode's reward gains gamma
+    /// times the value of its final observation (its future was cut, not zero).
+    pub fn process_step(&mut self, rewards: &[f32], terminated: &[bool], truncated: &[bool], final_observations: &[f32]) {
+        let o_size = self.policy.observation_size();
+        let rows = self.storage.rows(self.storage.step());
+        let s = &mut self.storage;
+        s.rewards[rows.clone()].copy_from_slice(rewards);
+        for (k, i) in rows.clone().enumerate() {
+            s.dones[i] = terminated[k] || truncated[k];
+        }
+        let cut: Vec<usize> = (0..rewards.len()).filter(|&k| truncated[k] && !terminated[k]).collect();
+        if !cut.is_empty() {
+            self.bootstrap_rows.clear();
+            for &k in &cut {
+                self.bootstrap_rows.extend_from_slice(&final_observations[k * o_size..(k + 1) * o_size]);
+            }
+            self.policy.normalizer.normalize(&self.bootstrap_rows, &mut self.normalized);
+            let values = self.policy.critic.forward(&self.normalized, cut.len(), &mut self.critic_ws, self.threads);
+            for (&k, v) in cut.iter().zip(values) {
+                self.storage.rewards[rows.start + k] += self.config.gamma * v;
+            }
+        }
+        self.storage.advance();
+    }
+
+    /// Closes the rollout: values of the observations after its last step, GAE, advantage normalization.
+    pub fn finish_rollout(&mut self, observations: &[f32]) {
+        let envs = self.storage.envs;
+        self.policy.normalizer.normalize(observations, &mut self.normalized);
+        let last = self.policy.critic.forward(&self.normalized, envs, &mut self.critic_ws, self.threads).to_vec();
+        self.storage.compute_returns(&last, self.config.gamma, self.config.lambda);
+        if self.config.normalize_advantages {
+            self.storage.normalize_advantages();
+        }
+    }
+
+    /// `epochs` passes of `minibatches` gradient steps over the finished rollout; clears it.
+    pub fn update(&mut self) -> UpdateStats {
+        let total = self.storage.len();
+        let size = total / self.config.minibatches;
+        let mut order: Vec<usize> = (0..total).collect();
+        let mut stats = UpdateStats::default();
+        let mut count = 0.0;
+        for _ in 0..self.config.epochs {
+            order.shuffle(&mut self.rng);
+            for chunk in order.chunks_exact(size) {
+                self.gather(chunk);
+                let terms = loss_and_gradients(
+                    &self.policy,
+                    &self.config,
+                    &self.minibatch,
+                    &mut self.loss_scratch,
+                    &mut self.grads,
+                    self.threads,
+                );
+                if self.config.schedule == Schedule::Adaptive {
+                    let target = self.config.desired_kl as f64;
+                    if terms.kl > 2.0 * target {
+                        self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
+                    } else if terms.kl < 0.5 * target && terms.kl > 0.0 {
+                        self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
+                    }
+                }
+                let norm = self.grads.clip_global_norm(self.config.max_grad_norm);
+                let o = &mut self.optimizer;
+                for adam in [&mut o.actor, &mut o.critic, &mut o.log_std] {
+                    adam.learning_rate = self.learning_rate;
+                }
+                o.actor.step(self.policy.actor.params_mut(), &self.grads.actor);
+                o.critic.step(self.policy.critic.params_mut(), &self.grads.critic);
+                o.log_std.step(&mut self.policy.log_std, &self.grads.log_std);
+                stats.surrogate_loss += terms.surrogate;
+                stats.value_loss += terms.value;
+                stats.entropy += terms.entropy;
+                stats.kl += terms.kl;
+                stats.clip_fraction += terms.clip_fraction;
+                stats.grad_norm += norm as f64;
+                count += 1.0;
+            }
+        }
+        for x in [
+            &mut stats.surrogate_loss,
+            &mut stats.value_loss,
+            &mut stats.entropy,
+            &mut stats.kl,
+            &mut stats.clip_fraction,
+            &mut stats.grad_norm,
+        ] {
+            *x /= count;
+        }
+        stats.learning_rate = self.learning_rate as f64;
+        stats.action_std = self.policy.mean_std() as f64;
+        self.storage.clear();
+        stats
+    }
+
+    fn gather(&mut self, indices: &[usize]) {
+        let (o, a) = (self.policy.observation_size(), self.policy.action_size());
+        let (s, mb) = (&self.storage, &mut self.minibatch);
+        mb.size = indices.len();
+        mb.observations.clear();
+        mb.actions.clear();
+        mb.old_means.clear();
+        mb.old_log_probs.clear();
+        mb.old_values.clear();
+        mb.advantages.clear();
+        mb.returns.clear();
+        for &i in indices {
+            mb.observations.extend_from_slice(&s.observations[i * o..(i + 1) * o]);
+            mb.actions.extend_from_slice(&s.actions[i * a..(i + 1) * a]);
+            mb.old_means.extend_from_slice(&s.means[i * a..(i + 1) * a]);
+            mb.old_log_probs.push(s.log_probs[i]);
+            mb.old_values.push(s.values[i]);
+            mb.advantages.push(s.advantages[i]);
+            mb.returns.push(s.returns[i]);
+        }
+        mb.old_log_std.clone_from(&self.rollout_log_std);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// A small policy and a minibatch whose ratios spread over both sides of the clip range.
+    fn setup(clipped_value_loss: bool) -> (ActorCritic, PpoConfig, Minibatch) {
+        let config = PpoConfig {
+            actor_hidden: vec![8, 6],
+            critic_hidden: vec![7],
+            clipped_value_loss,
+            entropy_coef: 0.05,
+            value_loss_coef: 0.7,
+            init_noise_std: 0.6,
+            ..PpoConfig::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut policy = ActorCritic::new(5, 3, &config, &mut rng);
+        // A larger output layer than the default 0.01 gain, so the actor's gradients are not tiny.
+        for p in policy.actor.params_mut() {
+            *p *= 1.0 + rng.random_range(0.0..3.0f32);
+        }
+        let n = 16;
+        let observations: Vec<f32> = (0..n * 5).map(|_| rng.random_range(-2.0..2.0)).collect();
+        let mut scratch = Workspace::default();
+        let means = policy.actor.forward(&observations, n, &mut scratch, 1).to_vec();
+        let mut critic_ws = Workspace::default();
+        let values = policy.critic.forward(&observations, n, &mut critic_ws, 1).to_vec();
+        let std = 0.6f32;
+        let actions: Vec<f32> = means.iter().map(|m| m + std * rng.random_range(-1.5..1.5)).collect();
+        let log_prob = |i: usize| -> f32 {
+            (0..3).map(|j| -0.5 * ((actions[i * 3 + j] - means[i * 3 + j]) / std).powi(2) - std.ln() - HALF_LN_2PI).sum()
+        };
+        let old_log_probs: Vec<f32> = (0..n).map(|i| log_prob(i) + rng.random_range(-0.5..0.5)).collect();
+        let old_means: Vec<f32> = means.iter().map(|m| m + rng.random_range(-0.2..0.2)).collect();
+        let old_values: Vec<f32> = values.iter().map(|v| v + rng.random_range(-0.5..0.5)).collect();
+        let batch = Minibatch {
+            size: n,
+            observations,
+            actions,
+            old_log_probs,
+            old_means,
+            old_log_std: vec![0.7f32.ln(); 3],
+            old_values,
+            advantages: (0..n).map(|_| rng.random_range(-2.0..2.0)).collect(),
+            returns: (0..n).map(|_| rng.random_range(-1.0..1.0)).collect(),
+        };
+        (policy, config, batch)
+    }
+
+    fn loss(policy: &ActorCritic, config: &PpoConfig, batch: &Minibatch) -> f64 {
+        let mut grads = Gradients::zeros(policy);
+        loss_and_gradients(policy, config, batch, &mut LossScratch::default(), &mut grads, 1).total
+    }
+
+    fn param_mut<'a>(policy: &'a mut ActorCritic, which: &str, i: usize) -> &'a mut f32 {
+        if which == "actor" { &mut policy.actor.params_mut()[i] } else { &mut policy.critic.params_mut()[i] }
+    }
+
+    /// Central differences, relative error per tensor, as for the MLP.
+    fn check(clipped_value_loss: bool) {
+        let (mut policy, config, batch) = setup(clipped_value_loss);
+        let mut grads = Gradients::zeros(&policy);
+        let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(terms.clip_fraction > 0.1 && terms.clip_fraction < 0.9, "both sides of the clip: {}", terms.clip_fraction);
+        let eps = 2e-3f32;
+        let compare = |name: &str, analytic: &[f32], numeric: &[f64]| {
+            let worst = analytic
+                .iter()
+                .zip(numeric)
+                .map(|(&a, &n)| (n - a as f64).abs() / (2e-3 + n.abs().max((a as f64).abs())))
+                .fold(0.0, f64::max);
+            assert!(worst < 3e-2, "{name} (clipped value loss {clipped_value_loss}): worst relative error {worst:.2e}");
+        };
+        let mut numeric = Vec::new();
+        for i in 0..policy.log_std.len() {
+            let original = policy.log_std[i];
+            policy.log_std[i] = original + eps;
+            let up = loss(&policy, &config, &batch);
+            policy.log_std[i] = original - eps;
+            let down = loss(&policy, &config, &batch);
+            policy.log_std[i] = original;
+            numeric.push((up - down) / (2.0 * eps as f64));
+        }
+        compare("log_std", &grads.log_std, &numeric);
+        for which in ["actor", "critic"] {
+            let tensors = if which == "actor" { policy.actor.tensors().to_vec() } else { policy.critic.tensors().to_vec() };
+            for tensor in tensors {
+                let mut numeric = Vec::new();
+                for i in tensor.range.clone() {
+                    let original = *param_mut(&mut policy, which, i);
+                    *param_mut(&mut policy, which, i) = original + eps;
+                    let up = loss(&policy, &config, &batch);
+                    *param_mut(&mut policy, which, i) = original - eps;
+                    let down = loss(&policy, &config, &batch);
+                    *param_mut(&mut policy, which, i) = original;
+                    numeric.push((up - down) / (2.0 * eps as f64));
+                }
+                let analytic = if which == "actor" { &grads.actor[tensor.range.clone()] } else { &grads.critic[tensor.range.clone()] };
+                compare(&format!("{which}.{}", tensor.name), analytic, &numeric);
+            }
+        }
+    }
+
+    #[test]
+    fn ppo_loss_gradients_match_finite_differences() {
+        check(true);
+        check(false);
+    }
+
+    #[test]
+    fn a_zero_advantage_batch_only_moves_the_value_and_the_entropy() {
+        let (policy, config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        let mut grads = Gradients::zeros(&policy);
+        loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(grads.actor.iter().all(|&g| g == 0.0));
+        assert!(grads.log_std.iter().all(|&g| (g + config.entropy_coef).abs() < 1e-7), "entropy pushes sigma up");
+        assert!(grads.critic.iter().any(|&g| g != 0.0));
+    }
+
+    #[test]
+    fn a_positive_advantage_raises_the_probability_of_its_action() {
+        let (mut policy, mut config, mut batch) = setup(false);
+        config.entropy_coef = 0.0;
+        config.value_loss_coef = 0.0;
+        batch.advantages.iter_mut().for_each(|a| *a = 1.0);
+        let mut grads = Gradients::zeros(&policy);
+        let before = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        for (p, g) in policy.actor.params_mut().iter_mut().zip(&grads.actor) {
+            *p -= 1e-3 * g;
+        }
+        for (p, g) in policy.log_std.iter_mut().zip(&grads.log_std) {
+            *p -= 1e-3 * g;
+        }
+        let after = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(after.surrogate < before.surrogate, "{} -> {}", before.surrogate, after.surrogate);
+    }
+}

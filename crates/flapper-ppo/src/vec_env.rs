@@ -1,0 +1,55 @@
+//! The interface between any batch of environments and the learner (rsl_rl's `VecEnv`): N
+//! environments stepped together with automatic reset, flat observation and action buffers. The flight
+//! task and the inverted-pendulum check both implement it; the learner sees nothing else of them.
+
+/// An environment's error, passed through the learner unchanged.
+pub type EnvError = Box<dyn std::error::Error + Send + Sync>;
+
+/// One finished episode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpisodeRecord {
+    pub episode_return: f64,
+    pub length: usize,
+    /// Why it ended: one of [`VecEnv::end_reasons`].
+    pub end_reason: &'static str,
+}
+
+pub trait VecEnv {
+    fn num_envs(&self) -> usize;
+    fn observation_size(&self) -> usize;
+    fn action_size(&self) -> usize;
+
+    /// Applies one action per environment (`num_envs() * action_size()` numbers, environment by
+    /// environment). Episodes that end are reset at once: the next observation is the new episode's.
+    fn step(&mut self, actions: &[f32]) -> Result<(), EnvError>;
+
+    /// Current observations, `num_envs() * observation_size()` numbers.
+    fn observations(&self) -> &[f32];
+    /// Rewards of the last step.
+    fn rewards(&self) -> &[f32];
+    /// The episode ended at the last step by a failure: its value after the end is zero.
+    fn terminated(&self) -> &[bool];
+    /// The episode was cut at the last step (time limit): the learner bootstraps its value from
+    /// [`VecEnv::final_observations`].
+    fn truncated(&self) -> &[bool];
+    /// For each truncated environment, its last observation before the reset (other rows unspecified).
+    fn final_observations(&self) -> &[f32];
+
+    /// Episodes finished since the last call.
+    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord>;
+    /// Every value `EpisodeRecord::end_reason` can take (one CSV column each).
+    fn end_reasons(&self) -> Vec<&'static str>;
+
+    /// Names of per-step diagnostics the learner averages and logs (e.g. reward terms).
+    fn diagnostic_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Their values at the last step, `num_envs() * diagnostic_names().len()` numbers.
+    fn diagnostics(&self) -> &[f32] {
+        &[]
+    }
+
+    /// Restarts every episode with random streams drawn from `seed` alone. The learner does this at
+    /// checkpoint boundaries, so that a run resumed from a checkpoint replays the uninterrupted one.
+    fn restart(&mut self, seed: u64) -> Result<(), EnvError>;
+}

@@ -1,0 +1,125 @@
+//! A training run's configuration in one TOML file: `[runner]` (environments, iterations, seed,
+//! checkpoints), `[ppo]` (the learner) and `[task]` (the flight task; `stage = 1..4` picks the
+//! curriculum preset, every other key overrides it). Every key is optional; unknown keys are errors.
+
+use std::path::Path;
+
+use flapper_ppo::config::InvalidSetting;
+use flapper_ppo::{PpoConfig, RunnerConfig};
+use flapper_task::TaskConfig;
+use flapper_task::config::ConfigError;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, thiserror::Error)]
+pub enum TrainConfigError {
+    #[error("cannot read config '{path}': {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("config '{path}': {message}")]
+    Parse { path: String, message: String },
+    #[error("config '{path}', [task]: {source}")]
+    Task { path: String, source: ConfigError },
+    #[error("config '{path}': {source}")]
+    Invalid { path: String, source: InvalidSetting },
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainConfig {
+    pub runner: RunnerConfig,
+    pub ppo: PpoConfig,
+    pub task: TaskConfig,
+}
+
+/// The learner's half of the file; `task` is read by the task's own loader.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LearnerTables {
+    #[serde(default)]
+    runner: RunnerConfig,
+    #[serde(default)]
+    ppo: PpoConfig,
+    #[serde(default)]
+    #[allow(dead_code)]
+    task: Option<toml::Table>,
+}
+
+impl TrainConfig {
+    /// Reads `path`; `stage`, when given, replaces the file's `task.stage`.
+    pub fn load(path: &Path, stage: Option<i64>) -> Result<Self, TrainConfigError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| TrainConfigError::Read { path: path.display().to_string(), source })?;
+        Self::from_toml(&text, &path.display().to_string(), stage)
+    }
+
+    /// As [`TrainConfig::load`], from text; `origin` names it in errors.
+    pub fn from_toml(text: &str, origin: &str, stage: Option<i64>) -> Result<Self, TrainConfigError> {
+        let parse = |message: String| TrainConfigError::Parse { path: origin.to_owned(), message };
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| parse(e.to_string()))?;
+        let learner: LearnerTables =
+            toml::Value::Table(table.clone()).try_into().map_err(|e: toml::de::Error| parse(e.to_string()))?;
+        let mut task_table = match table.remove("task") {
+            Some(toml::Value::Table(t)) => t,
+            Some(_) => return Err(parse("[task] must be a table".into())),
+            None => toml::Table::new(),
+        };
+        if let Some(stage) = stage {
+            task_table.insert("stage".into(), toml::Value::Integer(stage));
+        }
+        let task = TaskConfig::from_toml(&toml::to_string(&task_table).map_err(|e| parse(e.to_string()))?, origin)
+            .map_err(|source| TrainConfigError::Task { path: origin.to_owned(), source })?;
+        let invalid = |source| TrainConfigError::Invalid { path: origin.to_owned(), source };
+        learner.ppo.validate().map_err(invalid)?;
+        learner.runner.validate(&learner.ppo).map_err(invalid)?;
+        Ok(Self { runner: learner.runner, ppo: learner.ppo, task })
+    }
+
+    /// The whole configuration, every value written out, as TOML (saved with the run and its files).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("the config serializes")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_file_gives_the_paper_and_rsl_rl_defaults() {
+        let c = TrainConfig::from_toml("", "empty.toml", None).unwrap();
+        assert_eq!(c.ppo, PpoConfig::default());
+        assert_eq!(c.runner, RunnerConfig::default());
+        assert_eq!(c.task, TaskConfig::default());
+        assert_eq!((c.ppo.steps_per_env, c.ppo.epochs, c.ppo.minibatches, c.ppo.clip), (24, 5, 4, 0.2));
+        assert_eq!((c.ppo.gamma, c.ppo.lambda, c.ppo.desired_kl, c.runner.envs), (0.99, 0.95, 0.01, 256));
+    }
+
+    #[test]
+    fn written_config_reads_back_identically_and_stage_overrides() {
+        let c = TrainConfig::from_toml("[runner]\niterations = 7\n[task]\nstage = 2\n[task.reward]\nposition_scale_m = 0.7\n", "a.toml", None)
+            .unwrap();
+        assert_eq!(c.runner.iterations, 7);
+        assert_eq!(c.task.stage, 2);
+        let again = TrainConfig::from_toml(&c.to_toml(), "b.toml", None).unwrap();
+        assert_eq!(again, c);
+        let staged = TrainConfig::from_toml(&c.to_toml(), "b.toml", Some(1)).unwrap();
+        assert_eq!(staged.task.stage, 1);
+        assert_eq!(staged.task.reward.position_scale_m, 0.7, "the file's overrides stay");
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_named_with_the_file() {
+        let err = |text: &str| TrainConfig::from_toml(text, "bad.toml", None).unwrap_err().to_string();
+        let e = err("[ppo]\ncliip = 0.2\n");
+        assert!(e.contains("bad.toml") && e.contains("cliip"), "{e}");
+        let e = err("[trainer]\nx = 1\n");
+        assert!(e.contains("trainer"), "{e}");
+        let e = err("[ppo]\ngamma = 1.5\n");
+        assert!(e.contains("ppo.gamma") && e.contains("1.5"), "{e}");
+        let e = err("[runner]\nenvs = 0\n");
+        assert!(e.contains("runner.envs"), "{e}");
+        let e = err("[task.reward]\nposition_wieght = 1.0\n");
+        assert!(e.contains("bad.toml") && e.contains("position_wieght"), "{e}");
+        let e = err("[ppo]\nactivation = \"sigmoid\"\n");
+        assert!(e.contains("sigmoid"), "{e}");
+        assert!(TrainConfig::from_toml("", "x.toml", Some(7)).unwrap_err().to_string().contains("stage 7"));
+    }
+}

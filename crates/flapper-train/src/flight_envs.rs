@@ -1,0 +1,93 @@
+//! The flight task's vectorized environments as the learner sees them: the [`VecEnv`] interface over
+//! [`FlightVecEnv`], with the four reward kernels as per-step diagnostics.
+
+use flapper_ppo::{EnvError, EpisodeRecord, VecEnv};
+use flapper_sim::{ModelError, RobotModel};
+use flapper_task::termination::EpisodeEnd;
+use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
+
+/// Names of the diagnostics: each reward kernel's value in (0, 1], before weighting.
+pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level", "r_energy"];
+
+pub struct FlightEnvs {
+    inner: FlightVecEnv,
+    diagnostics: Vec<f32>,
+}
+
+impl FlightEnvs {
+    /// `count` environments on procedural references from `task` on `threads` threads (0 = all cores).
+    pub fn new(robot: &RobotModel, task: TaskConfig, count: usize, seed: u64, threads: usize) -> Result<Self, ModelError> {
+        let inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
+        Ok(Self { diagnostics: vec![0.0; count * REWARD_TERM_NAMES.len()], inner })
+    }
+
+    pub fn inner(&self) -> &FlightVecEnv {
+        &self.inner
+    }
+}
+
+impl VecEnv for FlightEnvs {
+    fn num_envs(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn observation_size(&self) -> usize {
+        self.inner.observation_size()
+    }
+
+    fn action_size(&self) -> usize {
+        self.inner.action_size()
+    }
+
+    fn step(&mut self, actions: &[f32]) -> Result<(), EnvError> {
+        self.inner.step(actions)?;
+        for (out, t) in self.diagnostics.chunks_exact_mut(REWARD_TERM_NAMES.len()).zip(self.inner.reward_terms()) {
+            out.copy_from_slice(&[t.position as f32, t.body_rate as f32, t.level as f32, t.energy as f32]);
+        }
+        Ok(())
+    }
+
+    fn observations(&self) -> &[f32] {
+        self.inner.observations()
+    }
+
+    fn rewards(&self) -> &[f32] {
+        self.inner.rewards()
+    }
+
+    fn terminated(&self) -> &[bool] {
+        self.inner.terminated()
+    }
+
+    fn truncated(&self) -> &[bool] {
+        self.inner.truncated()
+    }
+
+    fn final_observations(&self) -> &[f32] {
+        self.inner.final_observations()
+    }
+
+    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord> {
+        self.inner
+            .take_finished_episodes()
+            .into_iter()
+            .map(|e| EpisodeRecord { episode_return: e.episode_return, length: e.length, end_reason: e.end.name() })
+            .collect()
+    }
+
+    fn end_reasons(&self) -> Vec<&'static str> {
+        EpisodeEnd::ALL.iter().map(|e| e.name()).collect()
+    }
+
+    fn diagnostic_names(&self) -> Vec<String> {
+        REWARD_TERM_NAMES.iter().map(|s| s.to_string()).collect()
+    }
+
+    fn diagnostics(&self) -> &[f32] {
+        &self.diagnostics
+    }
+
+    fn restart(&mut self, seed: u64) -> Result<(), EnvError> {
+        Ok(self.inner.restart(seed)?)
+    }
+}

@@ -1,0 +1,148 @@
+//! The learner end to end: it solves the inverted pendulum, a resumed run equals an uninterrupted
+//! one, the same seed gives the same run, and broken or mismatched checkpoints are refused.
+
+use std::path::{Path, PathBuf};
+
+use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_ppo::{PpoConfig, RunnerConfig, Start, TrainError, Trainer};
+use flapper_sim::RobotModel;
+use flapper_train::run::{flight_trainer, solve_inverted_pendulum};
+use flapper_train::{InvertedPendulumEnvs, TrainConfig};
+
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flapper-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn ppo_solves_the_inverted_pendulum() {
+    let dir = scratch_dir("pendulum");
+    let outcome = solve_inverted_pendulum(1, 400, 5, &dir).unwrap();
+    let steps = outcome.steps_to_solve.unwrap_or_else(|| panic!("not solved in {} iterations: {:?}", outcome.iterations, outcome.test_returns));
+    assert!(steps <= 600_000, "solved only after {steps} steps");
+    assert!(outcome.test_returns.iter().all(|&r| r == 1000.0));
+    assert!(dir.join("policy.safetensors").exists() && dir.join("training.csv").exists() && dir.join("learning_curves.svg").exists());
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// A small flight-training config: few environments, short rollouts, small networks.
+fn small_flight_config(iterations: usize, seed: u64) -> TrainConfig {
+    let text = format!(
+        "[runner]\nenvs = 6\niterations = {iterations}\nseed = {seed}\nthreads = 2\ncheckpoint_every = 2\n\
+         [ppo]\nsteps_per_env = 8\nminibatches = 2\nepochs = 2\nactor_hidden = [16]\ncritic_hidden = [16]\n\
+         [task.episode]\nmax_steps = 20\n"
+    );
+    TrainConfig::from_toml(&text, "test.toml", None).unwrap()
+}
+
+fn train(config: &TrainConfig, dir: &Path, start: Start) -> Trainer<flapper_train::FlightEnvs> {
+    let robot = RobotModel::flapper().unwrap();
+    let mut trainer = flight_trainer(&robot, config, dir, start).unwrap();
+    trainer.run(&mut |_, _| true).unwrap();
+    trainer
+}
+
+/// The CSV without its timing columns (wall time, steps/s, time split differ between runs).
+fn csv_numbers(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("training.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let timing = |h: &str| h.contains("time") || h == "steps_per_s";
+    text.lines()
+        .map(|line| line.split(',').zip(&header).filter(|(_, h)| !timing(h)).map(|(v, _)| v).collect::<Vec<_>>().join(","))
+        .collect()
+}
+
+#[test]
+fn a_resumed_flight_run_equals_the_uninterrupted_one() {
+    let whole = scratch_dir("whole");
+    let uninterrupted = train(&small_flight_config(6, 5), &whole, Start::Fresh);
+
+    // The same run killed after iteration 4 with only the iteration-2 checkpoint on disk.
+    let parts = scratch_dir("parts");
+    train(&small_flight_config(4, 5), &parts, Start::Fresh);
+    for name in ["iter_000004.safetensors", "iter_000004.safetensors.json"] {
+        std::fs::remove_file(parts.join("checkpoints").join(name)).unwrap();
+    }
+    std::fs::remove_file(parts.join("policy.safetensors")).unwrap();
+    let resumed = train(&small_flight_config(6, 5), &parts, Start::Resume);
+
+    assert_eq!(resumed.iteration(), 6);
+    assert_eq!(resumed.env_steps(), uninterrupted.env_steps());
+    assert_eq!(resumed.ppo().policy, uninterrupted.ppo().policy, "weights, log-std and normalizer");
+    assert_eq!(resumed.ppo().optimizer, uninterrupted.ppo().optimizer);
+    assert_eq!(resumed.ppo().learning_rate, uninterrupted.ppo().learning_rate);
+    assert_eq!(csv_numbers(&parts), csv_numbers(&whole), "every logged number except timings");
+    assert_eq!(csv_numbers(&whole).len(), 7, "header and six iterations");
+
+    let a = checkpoint::load(&whole.join("policy.safetensors")).unwrap();
+    let b = checkpoint::load(&parts.join("policy.safetensors")).unwrap();
+    assert_eq!(a.policy, b.policy);
+    assert!(a.optimizer.is_none(), "policy files hold no optimizer");
+    for dir in [whole, parts] {
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
+
+#[test]
+fn the_same_seed_gives_the_same_run_and_another_seed_does_not() {
+    let (a, b, c) = (scratch_dir("seed-a"), scratch_dir("seed-b"), scratch_dir("seed-c"));
+    let first = train(&small_flight_config(2, 9), &a, Start::Fresh);
+    let second = train(&small_flight_config(2, 9), &b, Start::Fresh);
+    let other = train(&small_flight_config(2, 10), &c, Start::Fresh);
+    assert_eq!(first.ppo().policy, second.ppo().policy);
+    assert_eq!(csv_numbers(&a), csv_numbers(&b));
+    assert_ne!(first.ppo().policy, other.ppo().policy);
+    for dir in [a, b, c] {
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
+
+#[test]
+fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
+    let dir = scratch_dir("refuse");
+    train(&small_flight_config(2, 1), &dir, Start::Fresh);
+    let robot = RobotModel::flapper().unwrap();
+    let before = std::fs::read(dir.join("policy.safetensors")).unwrap();
+
+    // A second fresh run into the same folder is refused and writes nothing.
+    let again = flight_trainer(&robot, &small_flight_config(2, 1), &dir, Start::Fresh).err().unwrap();
+    assert!(again.to_string().contains("already holds a training run"), "{again}");
+    // Resuming a finished run asks for more iterations.
+    let done = flight_trainer(&robot, &small_flight_config(2, 1), &dir, Start::Resume).err().unwrap();
+    assert!(done.to_string().contains("raise the iteration count"), "{done}");
+    assert_eq!(std::fs::read(dir.join("policy.safetensors")).unwrap(), before);
+
+    // A truncated file: one clear error naming it.
+    let truncated = dir.join("truncated.safetensors");
+    std::fs::write(&truncated, &before[..before.len() / 2]).unwrap();
+    let err = checkpoint::load(&truncated).unwrap_err();
+    assert!(matches!(err, CheckpointError::Format { .. }) && err.to_string().contains("truncated.safetensors"), "{err}");
+
+    // A policy of another layout (the pendulum's 4 observations) cannot start a flight run.
+    let pendulum_dir = scratch_dir("pendulum-layout");
+    let envs = InvertedPendulumEnvs::new(4, 1).unwrap();
+    let runner = RunnerConfig { envs: 4, iterations: 1, threads: 1, ..RunnerConfig::default() };
+    let ppo = PpoConfig { steps_per_env: 4, actor_hidden: vec![8], critic_hidden: vec![8], ..PpoConfig::default() };
+    Trainer::new(envs, ppo, runner, String::new(), &pendulum_dir, Start::Fresh).unwrap().run(&mut |_, _| true).unwrap();
+    let other = scratch_dir("other-layout");
+    let err = flight_trainer(&robot, &small_flight_config(2, 1), &other, Start::InitFrom(pendulum_dir.join("policy.safetensors")))
+        .err()
+        .unwrap();
+    assert!(
+        matches!(err, flapper_train::run::RunError::Train(TrainError::Checkpoint(CheckpointError::Layout { .. }))),
+        "{err}"
+    );
+    assert!(err.to_string().contains("4 observations and 1 actions") && err.to_string().contains("540 observations"), "{err}");
+    assert!(!other.join("training.csv").exists(), "a refused run writes nothing");
+
+    // --init-from a policy of the same layout starts a new run from its weights.
+    let chained = scratch_dir("chained");
+    let source = checkpoint::load(&dir.join("policy.safetensors")).unwrap();
+    let trainer = flight_trainer(&robot, &small_flight_config(2, 1), &chained, Start::InitFrom(dir.join("policy.safetensors"))).unwrap();
+    assert_eq!(trainer.ppo().policy, source.policy);
+    assert_eq!(trainer.iteration(), 0);
+    for d in [dir, pendulum_dir, other, chained] {
+        std::fs::remove_dir_all(d).ok();
+    }
+}
