@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots};
 use flapper_sim::RobotModel;
 
+mod eval;
 mod train;
 
 #[derive(Parser)]
@@ -78,6 +79,29 @@ enum Command {
         /// Parallel environments (replaces runner.envs).
         #[arg(long)]
         envs: Option<usize>,
+    },
+    /// Evaluate trajectory tracking: fly a trained policy (and the scripted baseline, for comparison)
+    /// on a reference from randomized starts; print a table, write per-step CSV and plots.
+    Eval {
+        /// Trained policy (a run's policy.safetensors or a checkpoint). Without it only the scripted
+        /// baseline flies.
+        #[arg(long, value_name = "FILE")]
+        policy: Option<PathBuf>,
+        /// A named reference (see `flapper reference --list`) or a CSV file of time_s,x_m,y_m,z_m.
+        #[arg(long, default_value = "longitudinal")]
+        reference: String,
+        /// Episodes, each from its own randomized start.
+        #[arg(long, default_value_t = 100)]
+        episodes: usize,
+        /// Seed of the randomized starts.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output folder (created if needed): policy/ and scripted/ subfolders and summary.csv.
+        #[arg(long, default_value = "run/eval")]
+        out: PathBuf,
+        /// Do not fly the scripted baseline.
+        #[arg(long)]
+        no_baseline: bool,
     },
     /// Check the learner on the inverted pendulum (Gymnasium's InvertedPendulum): train one run per
     /// seed until the mean policy holds the pole for 1000 steps, and report the steps it took.
@@ -159,6 +183,9 @@ fn run(cli: Cli) -> Result<()> {
             let overrides = train::Overrides { iterations, seed, envs };
             train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)
         }
+        Command::Eval { policy, reference, episodes, seed, out, no_baseline } => {
+            eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline)
+        }
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }
@@ -225,8 +252,23 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, t
     Ok(())
 }
 
+/// A named reference (starting at 10 m altitude) or a CSV file, at `dt_s`, with `lookahead_steps` of
+/// straight continuation after its end (what the policy sees ahead at the last step).
+pub fn load_reference(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<flapper_task::reference::Reference> {
+    use flapper_task::reference::named::{named, reference_names};
+    let path = Path::new(reference);
+    if reference.ends_with(".csv") || path.exists() {
+        let lookahead = lookahead_steps.max(flapper_task::TaskConfig::default().observation.lookahead_steps);
+        Ok(flapper_task::reference::csv_file::load_reference_csv(path, dt_s, lookahead)?)
+    } else {
+        named(reference, flapper_sim::Vec3::new(0.0, 0.0, 10.0), dt_s, lookahead_steps as f64 * dt_s).with_context(|| {
+            format!("unknown reference '{reference}' (named: {}; or a .csv file)", reference_names().join(", "))
+        })
+    }
+}
+
 fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<()> {
-    use flapper_task::reference::named::{NAMED_REFERENCES, named, reference_names};
+    use flapper_task::reference::named::NAMED_REFERENCES;
     if list {
         for (name, what) in NAMED_REFERENCES {
             println!("{name:<20} {what}");
@@ -235,15 +277,7 @@ fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<
     }
     let Some(reference) = reference else { bail!("give a reference name or CSV file (or --list)") };
     let dt_s = 0.02;
-    let lookahead = flapper_task::TaskConfig::default().observation.lookahead_steps;
-    let path = Path::new(reference);
-    let loaded = if reference.ends_with(".csv") || path.exists() {
-        flapper_task::reference::csv_file::load_reference_csv(path, dt_s, lookahead)?
-    } else {
-        named(reference, flapper_sim::Vec3::new(0.0, 0.0, 10.0), dt_s, 0.0).with_context(|| {
-            format!("unknown reference '{reference}' (named: {}; or a .csv file)", reference_names().join(", "))
-        })?
-    };
+    let loaded = load_reference(reference, dt_s, 0)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
     let csv_path = out.join("reference.csv");
     let mut text = String::from("time_s,x_m,y_m,z_m\n");

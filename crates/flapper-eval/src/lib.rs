@@ -7,6 +7,9 @@ mod flight;
 mod flight_log;
 mod plots;
 mod scripted;
+pub mod spectrum;
+pub mod tracking;
+pub mod tracking_report;
 
 pub use controller::{Controller, FlightState, GlideController};
 pub use flight::{FlightSpec, fly, fly_simulator};

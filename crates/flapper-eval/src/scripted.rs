@@ -73,6 +73,11 @@ impl ScriptedGait {
     pub fn config(&self) -> &ScriptedGaitConfig {
         &self.config
     }
+
+    /// Holds `altitude_m` from now on instead of the starting altitude (to follow a reference).
+    pub fn set_altitude_target(&mut self, altitude_m: f64) {
+        self.reference_altitude_m = Some(altitude_m);
+    }
 }
 
 impl Controller for ScriptedGait {

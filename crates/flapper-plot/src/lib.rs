@@ -92,3 +92,46 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
     }
     Ok(())
 }
+
+/// Draws a dashed `reference` path and the `flown` paths in 3-D (x, y, z in metres) into an SVG file.
+pub fn draw_paths_3d(path: &Path, title: &str, reference: &[(f64, f64, f64)], flown: &[Vec<(f64, f64, f64)>]) -> Result<(), String> {
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let all = reference.iter().chain(flown.iter().flatten()).filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite());
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in all {
+        for (k, v) in [p.0, p.1, p.2].into_iter().enumerate() {
+            lo[k] = lo[k].min(v);
+            hi[k] = hi[k].max(v);
+        }
+    }
+    if !lo[0].is_finite() {
+        (lo, hi) = ([0.0; 3], [1.0; 3]);
+    }
+    // Equal scale on the three axes: a cube around the paths.
+    let half = (0..3).map(|k| hi[k] - lo[k]).fold(0.5, f64::max) / 2.0 * 1.05;
+    let centre: Vec<f64> = (0..3).map(|k| 0.5 * (lo[k] + hi[k])).collect();
+    let range = |k: usize| centre[k] - half..centre[k] + half;
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| error(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(10)
+        .build_cartesian_3d(range(0), range(2), range(1))
+        .map_err(|e| error(&e))?;
+    chart.with_projection(|mut p| {
+        p.pitch = 0.45;
+        p.yaw = 0.6;
+        p.scale = 0.8;
+        p.into_matrix()
+    });
+    chart.configure_axes().draw().map_err(|e| error(&e))?;
+    // Plotters' 3-D charts take (x, y, z) with y up: pass (x, altitude, lateral).
+    let up = |p: &(f64, f64, f64)| (p.0, p.2, p.1);
+    let dashed = ShapeStyle { color: BLACK.to_rgba(), filled: false, stroke_width: 1 };
+    chart.draw_series(DashedLineSeries::new(reference.iter().map(up), 6, 4, dashed)).map_err(|e| error(&e))?;
+    for (k, points) in flown.iter().enumerate() {
+        let style = ShapeStyle { color: COLORS[(k + 1) % COLORS.len()].to_rgba(), filled: false, stroke_width: 2 };
+        chart.draw_series(LineSeries::new(points.iter().map(up), style)).map_err(|e| error(&e))?;
+    }
+    root.present().map_err(|e| error(&e))
+}

@@ -103,7 +103,7 @@ pub struct RunnerConfig {
 
 impl Default for RunnerConfig {
     fn default() -> Self {
-        Self { envs: 256, iterations: 1500, seed: 1, threads: 0, checkpoint_every: 50 }
+        Self { envs: 256, iterations: 1500, seed: 1, threads: 0, checkpoint_every: 100 }
     }
 }
 

@@ -1,0 +1,91 @@
+//! `flapper eval`: fly a policy and the scripted baseline on one reference, print the table side by
+//! side, write CSV and plots per pilot and a summary CSV.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result, bail};
+use flapper_eval::ScriptedGaitConfig;
+use flapper_eval::tracking::{Pilot, evaluate_tracking};
+use flapper_eval::tracking_report::{TrackingSummary, write_steps_csv, write_tracking_plots};
+use flapper_ppo::checkpoint;
+use flapper_sim::RobotModel;
+use flapper_task::TaskConfig;
+use flapper_train::TrainConfig;
+
+use crate::load_reference;
+
+pub fn eval_command(
+    robot: &RobotModel,
+    policy_path: Option<&Path>,
+    reference: &str,
+    episodes: usize,
+    seed: u64,
+    out: &Path,
+    baseline: bool,
+) -> Result<()> {
+    if episodes == 0 || episodes > 100_000 {
+        bail!("--episodes must be 1 to 100000, got {episodes}");
+    }
+    if policy_path.is_none() && !baseline {
+        bail!("nothing to fly: give --policy, or drop --no-baseline");
+    }
+    let mut pilots: Vec<(&str, Pilot, TaskConfig)> = Vec::new();
+    if let Some(path) = policy_path {
+        let loaded = checkpoint::load(path)?;
+        let task = TrainConfig::from_toml(&loaded.info.config_toml, &format!("{} (its saved config)", path.display()), None)?.task;
+        let layout = flapper_task::observation::ObservationLayout {
+            history_frames: task.observation.history_frames,
+            lookahead_steps: task.observation.lookahead_steps,
+        };
+        loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
+        pilots.push(("policy", Pilot::Policy(Arc::new(loaded.policy)), task));
+    }
+    if baseline {
+        pilots.push(("scripted", Pilot::Scripted(ScriptedGaitConfig::default()), TaskConfig::default()));
+    }
+    let lookahead = pilots[0].2.observation.lookahead_steps;
+    let reference = Arc::new(load_reference(reference, 0.02, lookahead)?);
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    println!("{}: {:.1} s, {} episodes from randomized starts (seed {seed})", reference.name(), reference.duration_s(), episodes);
+    let mut summaries = Vec::new();
+    for (name, pilot, task) in &pilots {
+        let began = std::time::Instant::now();
+        let results = evaluate_tracking(robot, pilot, task, reference.clone(), episodes, seed)?;
+        let period = task.control_period_s(robot.timestep_s());
+        let summary = TrackingSummary::of(&results, period);
+        let dir = out.join(name);
+        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
+        write_steps_csv(&results, &dir.join("steps.csv"))?;
+        let plots = write_tracking_plots(&results, &format!("{name} on {}", reference.name()), &dir, 3)?;
+        eprintln!("  {name}: {} episodes in {:.1} s, wrote {} and {} plots", episodes, began.elapsed().as_secs_f64(), dir.join("steps.csv").display(), plots.len());
+        summaries.push((*name, summary));
+    }
+    let labels: Vec<String> = summaries[0].1.rows().into_iter().map(|(label, _)| label).collect();
+    print!("{:<34}", "");
+    for (name, _) in &summaries {
+        print!("{name:>18}");
+    }
+    println!();
+    let mut csv = String::from("metric");
+    for (name, _) in &summaries {
+        csv.push(',');
+        csv.push_str(name);
+    }
+    csv.push('\n');
+    for (k, label) in labels.iter().enumerate() {
+        print!("{label:<34}");
+        csv.push_str(&format!("\"{label}\""));
+        for (_, summary) in &summaries {
+            let value = &summary.rows()[k].1;
+            print!("{value:>18}");
+            csv.push_str(&format!(",\"{value}\""));
+        }
+        println!();
+        csv.push('\n');
+    }
+    let summary_path = out.join("summary.csv");
+    std::fs::write(&summary_path, csv).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
+    println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
+    Ok(())
+}

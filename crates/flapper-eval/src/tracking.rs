@@ -1,0 +1,171 @@
+//! Trajectory-tracking evaluation (paper IV-B, IV-C): a pilot (a learned policy, or the scripted gait
+//! for comparison) flies a fixed reference from randomized starts, episode after episode, and each
+//! flight is measured: completion, position error, airspeed, power, energy per metre, and the
+//! flapping frequency of flap, wing pitch and tail.
+
+use std::sync::Arc;
+
+use flapper_ppo::{ActorCritic, InferenceScratch};
+use flapper_sim::{ActuatedJoint, ModelError, N_ACTUATED_JOINTS, RobotModel, Vec3};
+use flapper_task::action::ActionMap;
+use flapper_task::reference::Reference;
+use flapper_task::termination::EpisodeEnd;
+use flapper_task::{FlightEnv, ReferenceSource, TaskConfig};
+use rayon::prelude::*;
+
+use crate::controller::{Controller, FlightState};
+use crate::scripted::{ScriptedGait, ScriptedGaitConfig};
+use crate::spectrum::{Fundamental, fundamental};
+
+/// Who flies.
+#[derive(Debug, Clone)]
+pub enum Pilot {
+    /// A trained policy's mean action, normalizer frozen.
+    Policy(Arc<ActorCritic>),
+    /// The scripted gait, its altitude target following the reference.
+    Scripted(ScriptedGaitConfig),
+}
+
+/// One control step of an evaluated flight.
+#[derive(Debug, Clone, Copy)]
+pub struct TrackingStep {
+    pub episode: usize,
+    pub time_s: f64,
+    pub position_m: Vec3,
+    pub target_m: Vec3,
+    pub error_m: f64,
+    pub airspeed_mps: f64,
+    pub euler_rad: [f64; 3],
+    pub joint_positions_rad: [f64; N_ACTUATED_JOINTS],
+    /// PD targets after the 7 Hz filter.
+    pub joint_targets_rad: [f64; N_ACTUATED_JOINTS],
+    pub mechanical_power_w: f64,
+    pub absolute_power_w: f64,
+}
+
+/// One evaluated flight.
+#[derive(Debug, Clone)]
+pub struct EpisodeResult {
+    pub end: EpisodeEnd,
+    pub steps: Vec<TrackingStep>,
+}
+
+impl EpisodeResult {
+    /// Flew to the end of the reference (no failure, no simulation fault).
+    pub fn completed(&self) -> bool {
+        matches!(self.end, EpisodeEnd::ReferenceEnd | EpisodeEnd::TimeLimit)
+    }
+
+    pub fn rms_error_m(&self) -> f64 {
+        (self.steps.iter().map(|s| s.error_m * s.error_m).sum::<f64>() / self.steps.len().max(1) as f64).sqrt()
+    }
+
+    pub fn max_error_m(&self) -> f64 {
+        self.steps.iter().map(|s| s.error_m).fold(0.0, f64::max)
+    }
+
+    fn mean(&self, f: impl Fn(&TrackingStep) -> f64) -> f64 {
+        self.steps.iter().map(f).sum::<f64>() / self.steps.len().max(1) as f64
+    }
+
+    pub fn mean_airspeed_mps(&self) -> f64 {
+        self.mean(|s| s.airspeed_mps)
+    }
+
+    pub fn mean_power_w(&self) -> f64 {
+        self.mean(|s| s.mechanical_power_w)
+    }
+
+    pub fn mean_absolute_power_w(&self) -> f64 {
+        self.mean(|s| s.absolute_power_w)
+    }
+
+    /// Absolute mechanical energy over the distance flown.
+    pub fn energy_per_metre_j(&self, period_s: f64) -> f64 {
+        let energy: f64 = self.steps.iter().map(|s| s.absolute_power_w * period_s).sum();
+        let distance: f64 = self.steps.windows(2).map(|w| (w[1].position_m - w[0].position_m).length()).sum();
+        energy / distance.max(1e-9)
+    }
+
+    /// The fundamental of `joint`'s angle after the first second (the launch transient).
+    pub fn fundamental(&self, joint: ActuatedJoint, period_s: f64) -> Option<Fundamental> {
+        let signal: Vec<f64> = self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect();
+        fundamental(&signal, 1.0 / period_s)
+    }
+}
+
+/// The task as evaluation runs it: `task` (the policy's training task) with randomization off and
+/// episodes as long as the reference.
+pub fn evaluation_task(task: &TaskConfig, reference: &Reference) -> TaskConfig {
+    let mut config = task.clone();
+    config.randomization.enabled = false;
+    config.episode.max_steps = reference.len();
+    config
+}
+
+/// Flies `episodes` episodes of `reference` with `pilot`. Episode k starts from the randomized initial
+/// state that environment k of a run seeded `seed` draws (position, speed, attitude offsets).
+pub fn evaluate_tracking(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    task: &TaskConfig,
+    reference: Arc<Reference>,
+    episodes: usize,
+    seed: u64,
+) -> Result<Vec<EpisodeResult>, ModelError> {
+    let config = Arc::new(evaluation_task(task, &reference));
+    (0..episodes)
+        .into_par_iter()
+        .map(|k| {
+            let env = FlightEnv::new(robot, config.clone(), ReferenceSource::Fixed(reference.clone()), seed, k)?;
+            Ok(fly_episode(env, pilot, k))
+        })
+        .collect()
+}
+
+fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize) -> EpisodeResult {
+    let action_map = ActionMap::new(env.control().sim(), env.config().control.action_scale);
+    let mut scripted = match pilot {
+        Pilot::Scripted(config) => Some(ScriptedGait::new(*config)),
+        Pilot::Policy(_) => None,
+    };
+    let mut observation = vec![0.0f32; env.observation_layout().size()];
+    let (mut scratch, mut action) = (InferenceScratch::default(), Vec::new());
+    let mut steps = Vec::with_capacity(env.reference().len());
+    loop {
+        match (pilot, scripted.as_mut()) {
+            (Pilot::Policy(policy), _) => {
+                env.observe(&mut observation);
+                policy.act_deterministic(&observation, &mut scratch, &mut action);
+            }
+            (_, Some(gait)) => {
+                gait.set_altitude_target(env.reference().target(env.step_count()).z);
+                let targets = gait.joint_targets(&FlightState::read(env.control().sim()));
+                action = action_map.to_action(&targets).to_vec();
+            }
+            (Pilot::Scripted(_), None) => unreachable!("a scripted pilot has its gait"),
+        }
+        let result = env.step(&action);
+        let control = env.control();
+        let sim = control.sim();
+        let state = FlightState::read(sim);
+        let target = env.reference().target(env.step_count());
+        let work = control.last_step_work();
+        steps.push(TrackingStep {
+            episode,
+            time_s: state.time_s,
+            position_m: state.position_m,
+            target_m: target,
+            error_m: (target - state.position_m).length(),
+            airspeed_mps: state.airspeed_mps,
+            euler_rad: state.euler_rad,
+            joint_positions_rad: state.joint_positions_rad,
+            joint_targets_rad: sim.joint_targets(),
+            mechanical_power_w: work.net_j / control.control_period_s(),
+            absolute_power_w: work.absolute_j / control.control_period_s(),
+        });
+        if let Some(end) = result.end {
+            return EpisodeResult { end, steps };
+        }
+    }
+}

@@ -1,0 +1,190 @@
+//! What an evaluation prints and writes: the summary table's figures, the per-step CSV, and the
+//! plots (path against reference in 3-D, top and side views; position error against time; joint
+//! angles and targets over one second, as the paper's Fig. 3).
+
+use std::path::{Path, PathBuf};
+
+use flapper_plot::{COLORS, Curve, Panel};
+use flapper_sim::ActuatedJoint;
+
+use crate::OutputError;
+use crate::tracking::EpisodeResult;
+
+/// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
+pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
+
+/// Figures over all episodes of one pilot on one reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackingSummary {
+    pub episodes: usize,
+    pub completed: usize,
+    /// Mean over episodes of each episode's RMS position error.
+    pub mean_rms_error_m: f64,
+    /// Worst RMS error of any episode.
+    pub worst_rms_error_m: f64,
+    /// Largest position error at any step of any episode.
+    pub max_error_m: f64,
+    pub mean_airspeed_mps: f64,
+    pub mean_power_w: f64,
+    pub mean_absolute_power_w: f64,
+    pub energy_per_metre_j: f64,
+    /// Mean fundamental frequency and energy fraction of [`ANALYSED_JOINTS`] over the episodes
+    /// (NaN where a joint does not move).
+    pub frequency_hz: [f64; 3],
+    pub energy_fraction: [f64; 3],
+}
+
+impl TrackingSummary {
+    pub fn of(results: &[EpisodeResult], period_s: f64) -> Self {
+        let n = results.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&EpisodeResult) -> f64| results.iter().map(f).sum::<f64>() / n;
+        let mut frequency_hz = [f64::NAN; 3];
+        let mut energy_fraction = [f64::NAN; 3];
+        for (k, joint) in ANALYSED_JOINTS.iter().enumerate() {
+            let found: Vec<_> = results.iter().filter_map(|r| r.fundamental(*joint, period_s)).collect();
+            if !found.is_empty() {
+                frequency_hz[k] = found.iter().map(|f| f.frequency_hz).sum::<f64>() / found.len() as f64;
+                energy_fraction[k] = found.iter().map(|f| f.energy_fraction).sum::<f64>() / found.len() as f64;
+            }
+        }
+        Self {
+            episodes: results.len(),
+            completed: results.iter().filter(|r| r.completed()).count(),
+            mean_rms_error_m: mean(&|r| r.rms_error_m()),
+            worst_rms_error_m: results.iter().map(|r| r.rms_error_m()).fold(0.0, f64::max),
+            max_error_m: results.iter().map(|r| r.max_error_m()).fold(0.0, f64::max),
+            mean_airspeed_mps: mean(&|r| r.mean_airspeed_mps()),
+            mean_power_w: mean(&|r| r.mean_power_w()),
+            mean_absolute_power_w: mean(&|r| r.mean_absolute_power_w()),
+            energy_per_metre_j: mean(&|r| r.energy_per_metre_j(period_s)),
+            frequency_hz,
+            energy_fraction,
+        }
+    }
+
+    /// The table's rows: (label, formatted value).
+    pub fn rows(&self) -> Vec<(String, String)> {
+        let mut rows = vec![
+            ("completed".to_string(), format!("{}/{}", self.completed, self.episodes)),
+            ("RMS position error (m), mean".into(), format!("{:.3}", self.mean_rms_error_m)),
+            ("RMS position error (m), worst".into(), format!("{:.3}", self.worst_rms_error_m)),
+            ("max position error (m)".into(), format!("{:.3}", self.max_error_m)),
+            ("mean airspeed (m/s)".into(), format!("{:.2}", self.mean_airspeed_mps)),
+            ("mechanical power (W), net".into(), format!("{:.2}", self.mean_power_w)),
+            ("mechanical power (W), absolute".into(), format!("{:.2}", self.mean_absolute_power_w)),
+            ("energy per metre (J/m)".into(), format!("{:.2}", self.energy_per_metre_j)),
+        ];
+        for (k, joint) in ANALYSED_JOINTS.iter().enumerate() {
+            rows.push((
+                format!("{} fundamental (Hz, energy)", joint.name()),
+                format!("{:.2} Hz, {:.0}%", self.frequency_hz[k], 100.0 * self.energy_fraction[k]),
+            ));
+        }
+        rows
+    }
+}
+
+/// One row per control step of every episode.
+pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
+    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
+    let mut out = csv::Writer::from_path(path).map_err(|e| error(&e))?;
+    let mut header: Vec<String> = [
+        "episode", "time_s", "x_m", "y_m", "z_m", "target_x_m", "target_y_m", "target_z_m", "error_m", "airspeed_mps", "roll_rad",
+        "pitch_rad", "yaw_rad",
+    ]
+    .map(String::from)
+    .to_vec();
+    for joint in ActuatedJoint::ALL {
+        header.push(format!("{}_rad", joint.name()));
+        header.push(format!("{}_target_rad", joint.name()));
+    }
+    header.extend(["mechanical_power_w".into(), "absolute_power_w".into()]);
+    out.write_record(&header).map_err(|e| error(&e))?;
+    for result in results {
+        for s in &result.steps {
+            let mut row = vec![s.episode.to_string(), format!("{:.2}", s.time_s)];
+            for v in [s.position_m, s.target_m] {
+                row.extend([v.x, v.y, v.z].map(|x| format!("{x:.4}")));
+            }
+            row.push(format!("{:.4}", s.error_m));
+            row.push(format!("{:.3}", s.airspeed_mps));
+            row.extend(s.euler_rad.map(|x| format!("{x:.4}")));
+            for i in 0..s.joint_positions_rad.len() {
+                row.push(format!("{:.4}", s.joint_positions_rad[i]));
+                row.push(format!("{:.4}", s.joint_targets_rad[i]));
+            }
+            row.push(format!("{:.3}", s.mechanical_power_w));
+            row.push(format!("{:.3}", s.absolute_power_w));
+            out.write_record(&row).map_err(|e| error(&e))?;
+        }
+    }
+    out.flush().map_err(|e| error(&e))
+}
+
+/// Writes `path_3d.svg`, `path.svg` (top and side views), `error.svg` and `joints.svg` for the first
+/// `shown` episodes of `results` into `dir`; returns their paths.
+pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, shown: usize) -> Result<Vec<PathBuf>, OutputError> {
+    let draw = |path: &Path, size, panels: &[Panel], grid| {
+        flapper_plot::draw(path, size, panels, grid).map_err(|message| OutputError::Write { path: path.to_owned(), message })
+    };
+    let shown: Vec<&EpisodeResult> = results.iter().take(shown.max(1)).collect();
+    let Some(first) = shown.first() else { return Ok(Vec::new()) };
+    let curve = |label: String, points: Vec<(f64, f64)>, k: usize, dashed| Curve { label, points, color: COLORS[k % COLORS.len()], dashed };
+    let view = |name: &str, pick: fn(&flapper_sim::Vec3) -> (f64, f64), y_label| {
+        let mut curves = vec![curve("reference".into(), first.steps.iter().map(|s| pick(&s.target_m)).collect(), 0, true)];
+        for (k, r) in shown.iter().enumerate() {
+            curves.push(curve(format!("episode {}", k), r.steps.iter().map(|s| pick(&s.position_m)).collect(), k + 1, false));
+        }
+        Panel { title: format!("{title}: {name}"), x_label: "x (m)", y_label, curves, equal_aspect: true }
+    };
+    let path_views = dir.join("path.svg");
+    draw(&path_views, (1100, 900), &[view("top view", |p| (p.x, p.y), "y (m)"), view("side view", |p| (p.x, p.z), "z (m)")], (2, 1))?;
+
+    let path_3d = dir.join("path_3d.svg");
+    let reference: Vec<(f64, f64, f64)> = first.steps.iter().map(|s| (s.target_m.x, s.target_m.y, s.target_m.z)).collect();
+    let flown: Vec<Vec<(f64, f64, f64)>> =
+        shown.iter().map(|r| r.steps.iter().map(|s| (s.position_m.x, s.position_m.y, s.position_m.z)).collect()).collect();
+    flapper_plot::draw_paths_3d(&path_3d, &format!("{title}: path (dashed: reference)"), &reference, &flown)
+        .map_err(|message| OutputError::Write { path: path_3d.clone(), message })?;
+
+    let error = dir.join("error.svg");
+    let curves = shown
+        .iter()
+        .enumerate()
+        .map(|(k, r)| curve(format!("episode {k}"), r.steps.iter().map(|s| (s.time_s, s.error_m)).collect(), k, false))
+        .collect();
+    draw(&error, (1000, 450), &[Panel { title: format!("{title}: position error"), x_label: "time (s)", y_label: "error (m)", curves, equal_aspect: false }], (1, 1))?;
+
+    // One second in the middle of the first episode (the paper's Fig. 3).
+    let t_mid = first.steps.last().map_or(0.0, |s| s.time_s) / 2.0;
+    let window: Vec<_> = first.steps.iter().filter(|s| s.time_s >= t_mid && s.time_s < t_mid + 1.0).collect();
+    let joint_panel = |name: &str, joints: &[ActuatedJoint]| Panel {
+        title: format!("{name}, one second of episode 0"),
+        x_label: "time (s)",
+        y_label: "angle (deg)",
+        curves: joints
+            .iter()
+            .enumerate()
+            .flat_map(|(k, j)| {
+                let i = j.index();
+                [
+                    curve(j.name().into(), window.iter().map(|s| (s.time_s, s.joint_positions_rad[i].to_degrees())).collect(), k, false),
+                    curve(format!("{} target", j.name()), window.iter().map(|s| (s.time_s, s.joint_targets_rad[i].to_degrees())).collect(), k, true),
+                ]
+            })
+            .collect(),
+        equal_aspect: false,
+    };
+    let joints = dir.join("joints.svg");
+    draw(
+        &joints,
+        (900, 900),
+        &[
+            joint_panel("wing flap", &[ActuatedJoint::FlapLeft, ActuatedJoint::FlapRight]),
+            joint_panel("wing pitch", &[ActuatedJoint::PitchLeft, ActuatedJoint::PitchRight]),
+            joint_panel("tail pitch", &[ActuatedJoint::TailPitch]),
+        ],
+        (3, 1),
+    )?;
+    Ok(vec![path_3d, path_views, error, joints])
+}
