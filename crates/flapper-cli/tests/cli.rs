@@ -113,3 +113,79 @@ fn unknown_reference_and_bad_csv_are_one_line_errors() {
     assert_one_line_error(&flapper(&["reference", file.to_str().unwrap(), "--out", dir.to_str().unwrap()]), "line 3");
     assert!(!dir.join("reference.csv").exists(), "nothing written for a rejected file");
 }
+
+/// A config for a train run of seconds: 4 environments, 2 iterations of 8 steps, small networks.
+fn tiny_train_config(dir: &std::path::Path) -> PathBuf {
+    let path = dir.join("tiny.toml");
+    std::fs::write(
+        &path,
+        "[runner]\nenvs = 4\niterations = 2\nthreads = 1\ncheckpoint_every = 1\n[ppo]\nsteps_per_env = 8\nactor_hidden = [8]\ncritic_hidden = [8]\n[task.episode]\nmax_steps = 30\n",
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
+    let dir = scratch("train");
+    let config = tiny_train_config(&dir);
+    let run = dir.join("run");
+    let output = flapper(&["train", "--config", config.to_str().unwrap(), "--out", run.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    for file in ["config.toml", "training.csv", "learning_curves.svg", "policy.safetensors", "policy.safetensors.json", "checkpoints/iter_000002.safetensors"] {
+        assert!(run.join(file).exists(), "{file} missing");
+    }
+    let csv = std::fs::read_to_string(run.join("training.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    for column in ["mean_return", "end_too_far", "r_position", "value_loss", "kl", "learning_rate", "action_std", "update_time_s"] {
+        assert!(csv.lines().next().unwrap().split(',').any(|h| h == column), "no column {column}");
+    }
+
+    // Starting again into the same folder is refused; --resume with more iterations extends it.
+    let again = flapper(&["train", "--config", config.to_str().unwrap(), "--out", run.to_str().unwrap()]);
+    assert_one_line_error(&again, "already holds a training run");
+    let resumed = flapper(&["train", "--resume", "--iterations", "3", "--out", run.to_str().unwrap()]);
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+    assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap().lines().count(), 4);
+
+    let eval_out = dir.join("eval");
+    let policy = run.join("policy.safetensors");
+    let output = flapper(&[
+        "eval", "--policy", policy.to_str().unwrap(), "--reference", "cruise", "--episodes", "2", "--out", eval_out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("completed") && stdout.contains("flap_left fundamental") && stdout.contains("scripted"), "{stdout}");
+    for file in ["summary.csv", "policy/steps.csv", "policy/path_3d.svg", "policy/path.svg", "policy/error.svg", "policy/joints.svg", "scripted/steps.csv"] {
+        assert!(eval_out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
+    }
+}
+
+#[test]
+fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
+    let dir = scratch("train-bad");
+    let unknown = dir.join("unknown.toml");
+    std::fs::write(&unknown, "[ppo]\nclip_range = 0.2\n").unwrap();
+    let out = dir.join("run");
+    assert_one_line_error(&flapper(&["train", "--config", unknown.to_str().unwrap(), "--out", out.to_str().unwrap()]), "clip_range");
+    let range = dir.join("range.toml");
+    std::fs::write(&range, "[ppo]\nlambda = 2.0\n").unwrap();
+    assert_one_line_error(&flapper(&["train", "--config", range.to_str().unwrap(), "--out", out.to_str().unwrap()]), "ppo.lambda");
+    assert_one_line_error(&flapper(&["train", "--stage", "7", "--out", out.to_str().unwrap()]), "stage 7");
+    assert_one_line_error(&flapper(&["train", "--resume", "--out", dir.join("nothing").to_str().unwrap()]), "config.toml");
+    assert!(!out.exists(), "a refused run creates nothing");
+
+    // A truncated checkpoint: the file is named, nothing is written.
+    let config = tiny_train_config(&dir);
+    let good = dir.join("good");
+    assert!(flapper(&["train", "--config", config.to_str().unwrap(), "--out", good.to_str().unwrap()]).status.success());
+    let bytes = std::fs::read(good.join("policy.safetensors")).unwrap();
+    let truncated = dir.join("truncated.safetensors");
+    std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
+    let chained = dir.join("chained");
+    let output = flapper(&["train", "--config", config.to_str().unwrap(), "--init-from", truncated.to_str().unwrap(), "--out", chained.to_str().unwrap()]);
+    assert_one_line_error(&output, "truncated.safetensors");
+    assert!(!chained.join("training.csv").exists());
+    assert_one_line_error(&flapper(&["eval", "--policy", truncated.to_str().unwrap(), "--episodes", "1"]), "truncated.safetensors");
+    assert_one_line_error(&flapper(&["eval", "--reference", "nowhere", "--episodes", "1"]), "unknown reference 'nowhere'");
+}
