@@ -130,6 +130,9 @@ enum Command {
         /// Worker threads for the environments (0 = one per core).
         #[arg(long, default_value_t = 0)]
         threads: usize,
+        /// Also time this many PPO iterations end to end on the flight task (0 = skip).
+        #[arg(long, default_value_t = 10)]
+        train_iterations: usize,
     },
 }
 
@@ -178,7 +181,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
         Command::Reference { reference, list, out } => reference_command(reference.as_deref(), list, &out),
-        Command::Bench { blocks, steps, envs, threads } => bench_command(&robot, blocks, steps, envs, threads),
+        Command::Bench { blocks, steps, envs, threads, train_iterations } => {
+            bench_command(&robot, blocks, steps, envs, threads, train_iterations)
+        }
         Command::Train { config, stage, out, resume, init_from, iterations, seed, envs } => {
             let overrides = train::Overrides { iterations, seed, envs };
             train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)
@@ -227,7 +232,7 @@ fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg:
     Ok(())
 }
 
-fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize) -> Result<()> {
+fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize, train_iterations: usize) -> Result<()> {
     if blocks == 0 || steps < 5 {
         bail!("--blocks must be at least 1 and --steps at least 5 (got {blocks} and {steps})");
     }
@@ -249,6 +254,18 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, t
     let n = flapper_ppo::benchmark::time_actor_critic_update(540, 1536, threads, blocks.clamp(3, 21));
     println!("actor + critic MLPs (540 -> 256, 128, 64 -> 5 | 1), minibatch {}, {} threads:", n.minibatch, n.threads);
     println!("  forward + backward + Adam  median {:.0} samples/s over {} repeats", n.median_samples_per_s, n.repeats);
+    if train_iterations > 0 {
+        let envs = if envs > 0 { envs } else { 256 };
+        let t = flapper_train::benchmark::time_training(robot, envs, threads, train_iterations)?;
+        println!("PPO training end to end, stage 1 from scratch, {} environments x 24 steps, {} threads, {} iterations:", t.envs, t.threads, t.iterations);
+        println!("  environment steps/s  median {:.0}  (paper: 30 M steps in about 5 h on 8 cores = 1.7 k/s)", t.median_steps_per_s);
+        println!(
+            "  time split           environments {:.0}%, inference {:.0}%, update {:.0}%",
+            100.0 * t.env_fraction,
+            100.0 * t.inference_fraction,
+            100.0 * t.update_fraction
+        );
+    }
     Ok(())
 }
 

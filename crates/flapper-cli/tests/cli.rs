@@ -82,10 +82,11 @@ fn output_path_that_is_a_file_is_one_line() {
 
 #[test]
 fn bench_prints_microseconds_per_step() {
-    let output = flapper(&["bench", "--blocks", "3", "--steps", "500"]);
-    assert!(output.status.success());
+    let output = flapper(&["bench", "--blocks", "3", "--steps", "500", "--envs", "8", "--train-iterations", "1"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("mj_step") && stdout.contains("control step"), "{stdout}");
+    assert!(stdout.contains("PPO training end to end") && stdout.contains("update"), "{stdout}");
 }
 
 #[test]

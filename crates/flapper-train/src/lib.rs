@@ -3,6 +3,7 @@
 //! checks the learner on a known answer (`inverted_pendulum`), a run's TOML configuration (`config`),
 //! and starting a flight-training run (`run`).
 
+pub mod benchmark;
 pub mod config;
 pub mod flight_envs;
 pub mod inverted_pendulum;
