@@ -103,6 +103,15 @@ enum Command {
         #[arg(long)]
         no_baseline: bool,
     },
+    /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
+    ExportPolicy {
+        /// A checkpoint (runs/NAME/checkpoints/iter_NNNNNN.safetensors).
+        #[arg(long, value_name = "FILE")]
+        checkpoint: PathBuf,
+        /// The policy file to write (must not exist).
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+    },
     /// Check the learner on the inverted pendulum (Gymnasium's InvertedPendulum): train one run per
     /// seed until the mean policy holds the pole for 1000 steps, and report the steps it took.
     Pendulum {
@@ -191,6 +200,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Eval { policy, reference, episodes, seed, out, no_baseline } => {
             eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline)
         }
+        Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }
@@ -266,6 +276,17 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, t
             100.0 * t.update_fraction
         );
     }
+    Ok(())
+}
+
+fn export_policy(checkpoint: &Path, out: &Path) -> Result<()> {
+    if out.exists() {
+        bail!("'{}' exists; choose another --out (nothing is overwritten)", out.display());
+    }
+    let loaded = flapper_ppo::checkpoint::load(checkpoint)?;
+    let info = flapper_ppo::checkpoint::CheckpointInfo { kind: "policy".into(), rng: None, ..loaded.info };
+    flapper_ppo::checkpoint::save(out, &info, &loaded.policy, None)?;
+    println!("wrote {} (iteration {}, {} environment steps)", out.display(), info.iteration, info.env_steps);
     Ok(())
 }
 
