@@ -8,10 +8,9 @@ use anyhow::{Context, Result, bail};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::tracking::{Pilot, evaluate_tracking};
 use flapper_eval::tracking_report::{TrackingSummary, write_steps_csv, write_tracking_plots};
-use flapper_ppo::checkpoint;
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
-use flapper_train::TrainConfig;
+use flapper_train::run::load_flight_policy;
 
 use crate::load_reference;
 
@@ -32,14 +31,8 @@ pub fn eval_command(
     }
     let mut pilots: Vec<(&str, Pilot, TaskConfig)> = Vec::new();
     if let Some(path) = policy_path {
-        let loaded = checkpoint::load(path)?;
-        let task = TrainConfig::from_toml(&loaded.info.config_toml, &format!("{} (its saved config)", path.display()), None)?.task;
-        let layout = flapper_task::observation::ObservationLayout {
-            history_frames: task.observation.history_frames,
-            lookahead_steps: task.observation.lookahead_steps,
-        };
-        loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
-        pilots.push(("policy", Pilot::Policy(Arc::new(loaded.policy)), task));
+        let (policy, task) = load_flight_policy(path)?;
+        pilots.push(("policy", Pilot::Policy(Arc::new(policy)), task));
     }
     if baseline {
         pilots.push(("scripted", Pilot::Scripted(ScriptedGaitConfig::default()), TaskConfig::default()));
