@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use flapper_sim::{ActuatedJoint, Vec3};
+use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Vec3};
 use flapper_plot::{COLORS, Curve, Panel};
 
 use crate::OutputError;
@@ -37,9 +37,31 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
 
     // Joints over the last second: at 5.3 Hz a longer window is unreadable.
     let t_end = rows.last().map_or(0.0, |r| r.state.time_s);
-    let window: Vec<_> = rows.iter().filter(|r| r.state.time_s >= t_end - 1.0).collect();
-    let joint_panel = |title: &'static str, joints: &[ActuatedJoint]| Panel {
-        title: title.into(),
+    let window: Vec<JointSample> = rows
+        .iter()
+        .filter(|r| r.state.time_s >= t_end - 1.0)
+        .map(|r| JointSample { time_s: r.state.time_s, angles_rad: r.state.joint_positions_rad, targets_rad: r.applied_rad })
+        .collect();
+    let joints_path = dir.join("joints.svg");
+    write_joint_window(&window, "last 1 s", &joints_path)?;
+
+    let path_path = dir.join("path.svg");
+    let positions: Vec<Vec3> = rows.iter().map(|r| r.state.position_m).collect();
+    write_path_views(&positions, title, &path_path)?;
+    Ok(vec![altitude_path, joints_path, path_path])
+}
+
+/// Joint angles and their (filtered) PD targets at one control step.
+pub(crate) struct JointSample {
+    pub time_s: f64,
+    pub angles_rad: [f64; N_ACTUATED_JOINTS],
+    pub targets_rad: [f64; N_ACTUATED_JOINTS],
+}
+
+/// The paper's Fig. 3: flap, wing pitch and tail angles with their targets over a short window.
+pub(crate) fn write_joint_window(window: &[JointSample], when: &str, path: &Path) -> Result<(), OutputError> {
+    let joint_panel = |name: &str, joints: &[ActuatedJoint]| Panel {
+        title: format!("{name} ({when})"),
         x_label: "time (s)",
         y_label: "angle (deg)",
         curves: joints
@@ -47,32 +69,27 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
             .enumerate()
             .flat_map(|(k, joint)| {
                 let i = joint.index();
-                let angle = window.iter().map(|r| (r.state.time_s, r.state.joint_positions_rad[i].to_degrees())).collect();
-                let target = window.iter().map(|r| (r.state.time_s, r.applied_rad[i].to_degrees())).collect();
+                let series = |f: fn(&JointSample) -> [f64; N_ACTUATED_JOINTS]| {
+                    window.iter().map(|s| (s.time_s, f(s)[i].to_degrees())).collect::<Vec<_>>()
+                };
                 [
-                    curve(joint.name(), angle, COLORS[k], false),
-                    curve(&format!("{} target", joint.name()), target, COLORS[k], true),
+                    Curve { label: joint.name().into(), points: series(|s| s.angles_rad), color: COLORS[k], dashed: false },
+                    Curve { label: format!("{} target", joint.name()), points: series(|s| s.targets_rad), color: COLORS[k], dashed: true },
                 ]
             })
             .collect(),
         equal_aspect: false,
     };
-    let joints_path = dir.join("joints.svg");
     draw(
-        &joints_path,
+        path,
         (900, 900),
         &[
-            joint_panel("wing flap (last 1 s)", &[ActuatedJoint::FlapLeft, ActuatedJoint::FlapRight]),
-            joint_panel("wing pitch (last 1 s)", &[ActuatedJoint::PitchLeft, ActuatedJoint::PitchRight]),
-            joint_panel("tail pitch (last 1 s)", &[ActuatedJoint::TailPitch]),
+            joint_panel("wing flap", &[ActuatedJoint::FlapLeft, ActuatedJoint::FlapRight]),
+            joint_panel("wing pitch", &[ActuatedJoint::PitchLeft, ActuatedJoint::PitchRight]),
+            joint_panel("tail pitch", &[ActuatedJoint::TailPitch]),
         ],
         (3, 1),
-    )?;
-
-    let path_path = dir.join("path.svg");
-    let positions: Vec<Vec3> = rows.iter().map(|r| r.state.position_m).collect();
-    write_path_views(&positions, title, &path_path)?;
-    Ok(vec![altitude_path, joints_path, path_path])
+    )
 }
 
 /// Writes the top (x-y) and side (x-z) views of a path of points to `path` (SVG).

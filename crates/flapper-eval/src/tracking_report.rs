@@ -8,6 +8,7 @@ use flapper_plot::{COLORS, Curve, Panel};
 use flapper_sim::ActuatedJoint;
 
 use crate::OutputError;
+use crate::plots::{JointSample, write_joint_window};
 use crate::tracking::EpisodeResult;
 
 /// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
@@ -157,34 +158,13 @@ pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, 
 
     // One second in the middle of the first episode (the paper's Fig. 3).
     let t_mid = first.steps.last().map_or(0.0, |s| s.time_s) / 2.0;
-    let window: Vec<_> = first.steps.iter().filter(|s| s.time_s >= t_mid && s.time_s < t_mid + 1.0).collect();
-    let joint_panel = |name: &str, joints: &[ActuatedJoint]| Panel {
-        title: format!("{name}, one second of episode 0"),
-        x_label: "time (s)",
-        y_label: "angle (deg)",
-        curves: joints
-            .iter()
-            .enumerate()
-            .flat_map(|(k, j)| {
-                let i = j.index();
-                [
-                    curve(j.name().into(), window.iter().map(|s| (s.time_s, s.joint_positions_rad[i].to_degrees())).collect(), k, false),
-                    curve(format!("{} target", j.name()), window.iter().map(|s| (s.time_s, s.joint_targets_rad[i].to_degrees())).collect(), k, true),
-                ]
-            })
-            .collect(),
-        equal_aspect: false,
-    };
+    let window: Vec<JointSample> = first
+        .steps
+        .iter()
+        .filter(|s| s.time_s >= t_mid && s.time_s < t_mid + 1.0)
+        .map(|s| JointSample { time_s: s.time_s, angles_rad: s.joint_positions_rad, targets_rad: s.joint_targets_rad })
+        .collect();
     let joints = dir.join("joints.svg");
-    draw(
-        &joints,
-        (900, 900),
-        &[
-            joint_panel("wing flap", &[ActuatedJoint::FlapLeft, ActuatedJoint::FlapRight]),
-            joint_panel("wing pitch", &[ActuatedJoint::PitchLeft, ActuatedJoint::PitchRight]),
-            joint_panel("tail pitch", &[ActuatedJoint::TailPitch]),
-        ],
-        (3, 1),
-    )?;
+    write_joint_window(&window, "one second of episode 0", &joints)?;
     Ok(vec![path_3d, path_views, error, joints])
 }
