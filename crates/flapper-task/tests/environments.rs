@@ -234,3 +234,28 @@ fn a_simulation_fault_ends_only_that_episode_and_is_counted() {
     envs.step(&[0.0; 20]).unwrap();
     assert!(envs.take_finished_episodes().is_empty());
 }
+
+#[test]
+fn a_truncated_episode_keeps_its_final_observation_and_restart_replays_the_start() {
+    let mut config = TaskConfig::default();
+    config.episode.max_steps = 3;
+    let mut envs = FlightVecEnv::new(&robot(), config.clone(), ReferenceSource::Procedural, 2, 11, 1).unwrap();
+    // The same environment 1, stepped alone with the same actions, observed before any reset.
+    let mut twin = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Procedural, 11, 1).unwrap();
+    let size = envs.observation_size();
+    let first = envs.observations().to_vec();
+    let action = [0.1f32, -0.2, 0.1, -0.2, -0.3];
+    for step in 0..3 {
+        envs.step(&[action, action].concat()).unwrap();
+        twin.step(&action);
+        assert_eq!(envs.truncated()[1], step == 2);
+    }
+    let mut expected = vec![0.0; size];
+    twin.observe(&mut expected);
+    assert_eq!(&envs.final_observations()[size..2 * size], expected.as_slice(), "the last observation before the reset");
+    assert_ne!(&envs.observations()[size..], expected.as_slice(), "the current observation is the new episode's");
+
+    // Restarting from the construction seed gives the first episode's start again.
+    envs.restart(11).unwrap();
+    assert_eq!(envs.observations(), first.as_slice());
+}
