@@ -1,18 +1,29 @@
-# The two commands of the README. Each fetches MuJoCo (once) and builds what it needs.
-#   make demo   fly the scripted baseline for 15 s and write CSV + plots to run/demo/
-#   make test   run the whole test suite
-.PHONY: demo test bench mujoco
+# The README's commands. Each fetches MuJoCo (once) and builds what it needs.
+#   make demo    fly the shipped stage-2 policy (and the scripted baseline) on the paper's longitudinal
+#                reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
+#   make test    run the whole test suite (what CI runs)
+#   make train   train stages 1 and 2 from scratch into runs/stage1 and runs/stage2 (about 35 min on 2 cores)
+#   make bench   simulator, environment, network and end-to-end training throughput
+.PHONY: demo test train bench baseline mujoco
 
 CARGO ?= cargo
+FLAPPER = $(CARGO) run --release --quiet -p flapper-cli --
 
 mujoco:
 	@./scripts/fetch-mujoco.sh
 
 demo: mujoco
-	$(CARGO) run --release --quiet -p flapper-cli -- fly --controller scripted --seconds 15 --out run/demo
+	$(FLAPPER) eval --policy policies/stage2/policy.safetensors --reference longitudinal --episodes 100 --seed 1 --out run/demo
 
 test: mujoco
 	$(CARGO) test --workspace
 
+train: mujoco
+	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1
+	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
+
 bench: mujoco
-	$(CARGO) run --release --quiet -p flapper-cli -- bench
+	$(FLAPPER) bench
+
+baseline: mujoco
+	$(FLAPPER) fly --controller scripted --seconds 15 --out run/baseline
