@@ -38,3 +38,8 @@ fn check_flies(stage: &str) {
 fn the_shipped_stage_1_policy_still_flies_the_cruise() {
     check_flies("stage1");
 }
+
+#[test]
+fn the_shipped_stage_2_policy_still_flies_the_cruise() {
+    check_flies("stage2");
+}
