@@ -45,11 +45,10 @@ pub fn train_command(
         config.runner.envs = n;
     }
     config.runner.validate(&config.ppo).context("command-line value")?;
-    if let Some(path) = &init_from {
-        if !path.is_file() {
+    if let Some(path) = &init_from
+        && !path.is_file() {
             bail!("--init-from '{}' is not a file", path.display());
         }
-    }
     let start = match (resume, init_from) {
         (true, _) => Start::Resume,
         (false, Some(path)) => Start::InitFrom(path),
@@ -105,7 +104,7 @@ pub fn train_command(
         bar.set_position(log.iteration as u64);
         if interactive {
             bar.set_message(message);
-        } else if log.iteration % 10 == 0 || log.iteration as u64 == total {
+        } else if log.iteration.is_multiple_of(10) || log.iteration as u64 == total {
             eprintln!("it {}/{} {}", log.iteration, total, message);
         }
         true

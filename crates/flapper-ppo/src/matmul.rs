@@ -19,6 +19,7 @@ impl Product {
 
 /// `c[m x n] (=|+=) a[m x k] * b[k x n]`, all row-major (up to the transposes in `how`), using
 /// `threads` threads (1 = this thread only).
+#[allow(clippy::too_many_arguments)] // the shape of a BLAS call: output, operands, m n k, layout, threads
 pub fn matmul(c: &mut [f32], a: &[f32], b: &[f32], m: usize, n: usize, k: usize, how: Product, threads: usize) {
     assert_eq!(c.len(), m * n, "output is not {m} x {n}");
     assert_eq!(a.len(), m * k, "left operand is not {m} x {k}");

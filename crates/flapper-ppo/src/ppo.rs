@@ -319,10 +319,10 @@ impl Ppo {
         let constant = -self.policy.log_std.iter().sum::<f32>() - a_size as f32 * HALF_LN_2PI;
         for env in 0..envs {
             let mut log_prob = constant;
-            for j in 0..a_size {
+            for (j, sigma) in std.iter().enumerate() {
                 let noise: f32 = self.rng.sample(StandardNormal);
                 let k = env * a_size + j;
-                actions[k] = means[k] + std[j] * noise;
+                actions[k] = means[k] + sigma * noise;
                 log_prob -= 0.5 * noise * noise;
             }
             s.log_probs[rows.start + env] = log_prob;

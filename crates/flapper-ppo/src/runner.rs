@@ -220,7 +220,7 @@ impl<E: VecEnv> Trainer<E> {
         let session_start = Instant::now();
         while self.iteration < self.runner.iterations {
             let began = Instant::now();
-            if self.iteration % self.runner.checkpoint_every == 0 {
+            if self.iteration.is_multiple_of(self.runner.checkpoint_every) {
                 self.env.restart(restart_seed(self.runner.seed, self.iteration)).map_err(TrainError::Env)?;
             }
             let (mut env_time, mut inference_time) = (0.0, 0.0);
@@ -281,7 +281,7 @@ impl<E: VecEnv> Trainer<E> {
             self.append_csv(&log)?;
             self.history.push(log.clone());
             let last = !on_iteration(&log, &self.ppo.policy) || self.iteration == self.runner.iterations;
-            if self.iteration % self.runner.checkpoint_every == 0 || last {
+            if self.iteration.is_multiple_of(self.runner.checkpoint_every) || last {
                 self.save_checkpoint(log.wall_time_s)?;
                 self.write_curves()?;
             }
@@ -333,8 +333,8 @@ impl<E: VecEnv> Trainer<E> {
         let path = self.csv_path();
         let header = self.header().join(",");
         let mut text = header.clone() + "\n";
-        if resume {
-            if let Ok(existing) = std::fs::read_to_string(&path) {
+        if resume
+            && let Ok(existing) = std::fs::read_to_string(&path) {
                 for line in existing.lines().skip(1) {
                     let iteration: Option<usize> = line.split(',').next().and_then(|v| v.parse().ok());
                     if iteration.is_some_and(|i| i <= self.iteration) {
@@ -343,7 +343,6 @@ impl<E: VecEnv> Trainer<E> {
                     }
                 }
             }
-        }
         checkpoint::write_atomically(&path, text.as_bytes())?;
         Ok(())
     }

@@ -1,6 +1,8 @@
 //! The model as built matches the paper, the simulator layer reads and edits what it says, and bad
 //! input or a broken simulation becomes an error value.
 
+#![allow(clippy::approx_constant)] // 3.14 here is the paper's Kutta-lift coefficient, not pi
+
 use flapper_sim::{
     ActuatedJoint, FluidCoefficients, InitialState, ModelError, RobotModel, SimFault, Vec3, default_model_path,
     quat_from_euler,
