@@ -55,9 +55,9 @@ pub fn eval_command(
         summaries.push((*name, summary));
     }
     let labels: Vec<String> = summaries[0].1.rows().into_iter().map(|(label, _)| label).collect();
-    print!("{:<34}", "");
+    print!("{:<36}", "");
     for (name, _) in &summaries {
-        print!("{name:>18}");
+        print!("{name:>26}");
     }
     println!();
     let mut csv = String::from("metric");
@@ -67,11 +67,11 @@ pub fn eval_command(
     }
     csv.push('\n');
     for (k, label) in labels.iter().enumerate() {
-        print!("{label:<34}");
+        print!("{label:<36}");
         csv.push_str(&format!("\"{label}\""));
         for (_, summary) in &summaries {
             let value = &summary.rows()[k].1;
-            print!("{value:>18}");
+            print!("{value:>26}");
             csv.push_str(&format!(",\"{value}\""));
         }
         println!();

@@ -15,10 +15,12 @@ use crate::tracking::EpisodeResult;
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
 
 /// Figures over all episodes of one pilot on one reference.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct TrackingSummary {
     pub episodes: usize,
     pub completed: usize,
+    /// Episodes that did not complete, by how they ended (termination reason name, count).
+    pub failures: Vec<(&'static str, usize)>,
     /// Mean over episodes of each episode's RMS position error.
     pub mean_rms_error_m: f64,
     /// Worst RMS error of any episode.
@@ -48,9 +50,15 @@ impl TrackingSummary {
                 energy_fraction[k] = found.iter().map(|f| f.energy_fraction).sum::<f64>() / found.len() as f64;
             }
         }
+        let failures = flapper_task::termination::EpisodeEnd::ALL
+            .iter()
+            .map(|end| (end.name(), results.iter().filter(|r| !r.completed() && r.end == *end).count()))
+            .filter(|(_, n)| *n > 0)
+            .collect();
         Self {
             episodes: results.len(),
             completed: results.iter().filter(|r| r.completed()).count(),
+            failures,
             mean_rms_error_m: mean(&|r| r.rms_error_m()),
             worst_rms_error_m: results.iter().map(|r| r.rms_error_m()).fold(0.0, f64::max),
             max_error_m: results.iter().map(|r| r.max_error_m()).fold(0.0, f64::max),
@@ -67,6 +75,14 @@ impl TrackingSummary {
     pub fn rows(&self) -> Vec<(String, String)> {
         let mut rows = vec![
             ("completed".to_string(), format!("{}/{}", self.completed, self.episodes)),
+            (
+                "ended early".into(),
+                if self.failures.is_empty() {
+                    "-".into()
+                } else {
+                    self.failures.iter().map(|(name, n)| format!("{name} {n}")).collect::<Vec<_>>().join(", ")
+                },
+            ),
             ("RMS position error (m), mean".into(), format!("{:.3}", self.mean_rms_error_m)),
             ("RMS position error (m), worst".into(), format!("{:.3}", self.worst_rms_error_m)),
             ("max position error (m)".into(), format!("{:.3}", self.max_error_m)),
