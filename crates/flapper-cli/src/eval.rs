@@ -54,7 +54,7 @@ pub fn eval_command(
         eprintln!("  {name}: {} episodes in {:.1} s, wrote {} and {} plots", episodes, began.elapsed().as_secs_f64(), dir.join("steps.csv").display(), plots.len());
         summaries.push((*name, summary));
     }
-    let labels: Vec<String> = summaries[0].1.rows().into_iter().map(|(label, _)| label).collect();
+    let tables: Vec<Vec<(String, String)>> = summaries.iter().map(|(_, s)| s.rows()).collect();
     print!("{:<36}", "");
     for (name, _) in &summaries {
         print!("{name:>26}");
@@ -66,11 +66,11 @@ pub fn eval_command(
         csv.push_str(name);
     }
     csv.push('\n');
-    for (k, label) in labels.iter().enumerate() {
+    for (k, (label, _)) in tables[0].iter().enumerate() {
         print!("{label:<36}");
         csv.push_str(&format!("\"{label}\""));
-        for (_, summary) in &summaries {
-            let value = &summary.rows()[k].1;
+        for table in &tables {
+            let value = &table[k].1;
             print!("{value:>26}");
             csv.push_str(&format!(",\"{value}\""));
         }

@@ -213,7 +213,7 @@ impl<E: VecEnv> Trainer<E> {
     /// early. Saves a checkpoint every `checkpoint_every` iterations and at the end, then the final
     /// policy (`policy.safetensors`).
     pub fn run(&mut self, on_iteration: &mut dyn FnMut(&IterationLog, &ActorCritic) -> bool) -> Result<(), TrainError> {
-        let (envs, o, a) = (self.env.num_envs(), self.env.observation_size(), self.env.action_size());
+        let (envs, a) = (self.env.num_envs(), self.env.action_size());
         let mut actions = vec![0.0f32; envs * a];
         let steps = self.ppo.config.steps_per_env;
         let n_diag = self.diagnostic_names.len();
@@ -239,10 +239,8 @@ impl<E: VecEnv> Trainer<E> {
                 self.ppo.process_step(e.rewards(), e.terminated(), e.truncated(), e.final_observations());
                 inference_time += t_after.elapsed().as_secs_f64();
                 reward_sum += e.rewards().iter().map(|&r| r as f64).sum::<f64>();
-                for row in e.diagnostics().chunks_exact(n_diag.max(1)).take(if n_diag > 0 { envs } else { 0 }) {
-                    for (s, &v) in diagnostic_sums.iter_mut().zip(row) {
-                        *s += v as f64;
-                    }
+                for (k, &v) in e.diagnostics().iter().enumerate() {
+                    diagnostic_sums[k % n_diag] += v as f64;
                 }
                 episodes.extend(self.env.take_finished_episodes());
             }
@@ -252,7 +250,6 @@ impl<E: VecEnv> Trainer<E> {
             let t = Instant::now();
             let update = self.ppo.update();
             let update_time = t.elapsed().as_secs_f64();
-            debug_assert_eq!(o, self.ppo.policy.observation_size());
 
             self.iteration += 1;
             let collected = (envs * steps) as u64;

@@ -77,10 +77,7 @@ impl FlightEnv {
             sim,
             ControlLoopConfig { substeps: config.control.substeps, filter_cutoff_hz: config.control.filter_cutoff_hz },
         );
-        let layout = ObservationLayout {
-            history_frames: config.observation.history_frames,
-            lookahead_steps: config.observation.lookahead_steps,
-        };
+        let layout = ObservationLayout::of(&config.observation);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);
         let placeholder = Arc::new(Reference::new("none", 0.02, vec![Vec3::ZERO]));

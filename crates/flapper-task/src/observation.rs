@@ -34,6 +34,11 @@ pub struct ObservationLayout {
 }
 
 impl ObservationLayout {
+    /// The layout a task config asks for.
+    pub fn of(config: &crate::config::ObservationConfig) -> Self {
+        Self { history_frames: config.history_frames, lookahead_steps: config.lookahead_steps }
+    }
+
     pub fn size(&self) -> usize {
         self.history_frames * FRAME_SIZE + 3 * self.lookahead_steps
     }

@@ -23,7 +23,8 @@ const RESET_NOISE: f64 = 0.01;
 const OBSERVATION_SIZE: usize = 4;
 
 const FELL: &str = "pole_fell";
-const TIME_LIMIT: &str = "time_limit";
+/// The end reason of an episode that reached [`MAX_EPISODE_STEPS`].
+pub const TIME_LIMIT: &str = "time_limit";
 
 struct Pendulum {
     data: MjData<Box<MjModel>>,

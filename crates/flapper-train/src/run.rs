@@ -9,7 +9,7 @@ use flapper_sim::{ModelError, RobotModel};
 
 use crate::config::{TrainConfig, TrainConfigError};
 use crate::flight_envs::FlightEnvs;
-use crate::inverted_pendulum::{InvertedPendulumEnvs, MAX_EPISODE_STEPS};
+use crate::inverted_pendulum::{InvertedPendulumEnvs, MAX_EPISODE_STEPS, TIME_LIMIT};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -37,10 +37,7 @@ pub fn saved_config(dir: &Path) -> Result<TrainConfig, RunError> {
 pub fn load_flight_policy(path: &Path) -> Result<(flapper_ppo::ActorCritic, flapper_task::TaskConfig), RunError> {
     let loaded = flapper_ppo::checkpoint::load(path).map_err(TrainError::from)?;
     let task = TrainConfig::from_toml(&loaded.info.config_toml, &format!("{} (its saved config)", path.display()), None)?.task;
-    let layout = flapper_task::observation::ObservationLayout {
-        history_frames: task.observation.history_frames,
-        lookahead_steps: task.observation.lookahead_steps,
-    };
+    let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
     loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE).map_err(TrainError::from)?;
     Ok((loaded.policy, task))
 }
@@ -77,6 +74,7 @@ pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes:
     let envs = InvertedPendulumEnvs::new(runner.envs, seed).map_err(TrainError::Env)?;
     let config_text = format!("# inverted pendulum check, seed {seed}\n");
     let mut trainer = Trainer::new(envs, ppo, runner, config_text, dir, Start::Fresh)?;
+    let time_limit_column = trainer.end_reasons().iter().position(|r| *r == TIME_LIMIT).expect("the pendulum reports time limits");
     let mut recent: Vec<f64> = Vec::new();
     let mut outcome = PendulumOutcome { steps_to_solve: None, iterations: 0, test_returns: Vec::new() };
     let mut test_error = None;
@@ -84,7 +82,7 @@ pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes:
         outcome.iterations = log.iteration;
         // Returns of this iteration's finished episodes are all we see; keep the last 10.
         if log.episodes > 0 {
-            let full = log.end_counts.get(1).copied().unwrap_or(0);
+            let full = log.end_counts.get(time_limit_column).copied().unwrap_or(0);
             recent.extend(std::iter::repeat_n(MAX_EPISODE_STEPS as f64, full));
             recent.extend(std::iter::repeat_n(0.0, log.episodes - full));
             let excess = recent.len().saturating_sub(10);
