@@ -123,27 +123,37 @@ pub fn evaluate_tracking(
         .collect()
 }
 
+/// A pilot's state within one episode.
+enum Flying<'a> {
+    Policy { policy: &'a ActorCritic, observation: Vec<f32>, scratch: InferenceScratch },
+    Scripted { gait: ScriptedGait, action_map: ActionMap },
+}
+
 fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize) -> EpisodeResult {
-    let action_map = ActionMap::new(env.control().sim(), env.config().control.action_scale);
-    let mut scripted = match pilot {
-        Pilot::Scripted(config) => Some(ScriptedGait::new(*config)),
-        Pilot::Policy(_) => None,
+    let mut flying = match pilot {
+        Pilot::Policy(policy) => Flying::Policy {
+            policy,
+            observation: vec![0.0f32; env.observation_layout().size()],
+            scratch: InferenceScratch::default(),
+        },
+        Pilot::Scripted(config) => Flying::Scripted {
+            gait: ScriptedGait::new(*config),
+            action_map: ActionMap::new(env.control().sim(), env.config().control.action_scale),
+        },
     };
-    let mut observation = vec![0.0f32; env.observation_layout().size()];
-    let (mut scratch, mut action) = (InferenceScratch::default(), Vec::new());
+    let mut action = Vec::new();
     let mut steps = Vec::with_capacity(env.reference().len());
     loop {
-        match (pilot, scripted.as_mut()) {
-            (Pilot::Policy(policy), _) => {
-                env.observe(&mut observation);
-                policy.act_deterministic(&observation, &mut scratch, &mut action);
+        match &mut flying {
+            Flying::Policy { policy, observation, scratch } => {
+                env.observe(observation);
+                policy.act_deterministic(observation, scratch, &mut action);
             }
-            (_, Some(gait)) => {
+            Flying::Scripted { gait, action_map } => {
                 gait.set_altitude_target(env.reference().target(env.step_count()).z);
                 let targets = gait.joint_targets(&FlightState::read(env.control().sim()));
                 action = action_map.to_action(&targets).to_vec();
             }
-            (Pilot::Scripted(_), None) => unreachable!("a scripted pilot has its gait"),
         }
         let result = env.step(&action);
         let control = env.control();
