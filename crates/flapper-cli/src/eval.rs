@@ -46,7 +46,7 @@ pub fn eval_command(
         let began = std::time::Instant::now();
         let results = evaluate_tracking(robot, pilot, task, reference.clone(), episodes, seed)?;
         let period = task.control_period_s(robot.timestep_s());
-        let summary = TrackingSummary::of(&results, period);
+        let summary = TrackingSummary::of(&results, period, flapper_task::reference::named::manoeuvre_window_s(reference.name()));
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;

@@ -285,7 +285,7 @@ fn export_policy(checkpoint: &Path, out: &Path) -> Result<()> {
     }
     let loaded = flapper_ppo::checkpoint::load(checkpoint)?;
     let info = flapper_ppo::checkpoint::CheckpointInfo { kind: "policy".into(), rng: None, ..loaded.info };
-    flapper_ppo::checkpoint::save(out, &info, &loaded.policy, None)?;
+    flapper_ppo::checkpoint::save(out, &info, &loaded.policy, None, None)?;
     println!("wrote {} (iteration {}, {} environment steps)", out.display(), info.iteration, info.env_steps);
     Ok(())
 }

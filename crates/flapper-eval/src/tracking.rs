@@ -64,6 +64,23 @@ impl EpisodeResult {
         self.steps.iter().map(|s| s.error_m).fold(0.0, f64::max)
     }
 
+    /// Flew upside down at some point (|roll| beyond 90 deg).
+    pub fn went_inverted(&self) -> bool {
+        self.steps.iter().any(|s| s.euler_rad[0].abs() > std::f64::consts::FRAC_PI_2)
+    }
+
+    /// Largest position error between `start_s` and `end_s` (NaN if the episode ended before).
+    pub fn max_error_between_m(&self, start_s: f64, end_s: f64) -> f64 {
+        let inside = self.steps.iter().filter(|s| s.time_s >= start_s && s.time_s <= end_s);
+        inside.map(|s| s.error_m).fold(f64::NAN, f64::max)
+    }
+
+    /// Seconds after `after_s` until the position error is first within `within_m` (0 if it already
+    /// is; `None` if it never is).
+    pub fn time_to_rejoin_s(&self, after_s: f64, within_m: f64) -> Option<f64> {
+        self.steps.iter().find(|s| s.time_s >= after_s && s.error_m <= within_m).map(|s| (s.time_s - after_s).max(0.0))
+    }
+
     fn mean(&self, f: impl Fn(&TrackingStep) -> f64) -> f64 {
         self.steps.iter().map(f).sum::<f64>() / self.steps.len().max(1) as f64
     }
@@ -94,11 +111,15 @@ impl EpisodeResult {
     }
 }
 
-/// The task as evaluation runs it: `task` (the policy's training task) with randomization off and
-/// episodes as long as the reference.
+/// The task as evaluation runs it: `task` (the policy's training task) with randomization off,
+/// episodes as long as the reference, and the paper's success criterion alone: an episode fails only
+/// by falling more than `max_position_error_m` (3 m) from the target. The attitude rule of stages 1-2
+/// never ends an evaluation (roll and pitch are ill-defined near the vertical of a loop); attitude
+/// excursions are reported apart.
 pub fn evaluation_task(task: &TaskConfig, reference: &Reference) -> TaskConfig {
     let mut config = task.clone();
     config.randomization.enabled = false;
+    config.episode.attitude_termination = false;
     config.episode.max_steps = reference.len();
     config
 }

@@ -1,6 +1,7 @@
-//! What an evaluation prints and writes: the summary table's figures, the per-step CSV, and the
-//! plots (path against reference in 3-D, top and side views; position error against time; joint
-//! angles and targets over one second, as the paper's Fig. 3).
+//! What an evaluation prints and writes: the summary table's figures (with the manoeuvre's, where the
+//! reference has one), the per-step CSV, and the plots (path against reference in 3-D, top and side
+//! views; position error against time; joint angles and targets over one second, as the paper's
+//! Fig. 3; altitude, airspeed, roll and pitch against time).
 
 use std::path::{Path, PathBuf};
 
@@ -35,10 +36,58 @@ pub struct TrackingSummary {
     /// (NaN where a joint does not move).
     pub frequency_hz: [f64; 3],
     pub energy_fraction: [f64; 3],
+    /// Episodes that flew upside down at some point (|roll| beyond 90 deg): expected in loops,
+    /// reported because evaluation never ends an episode on attitude.
+    pub inverted_episodes: usize,
+    /// How the manoeuvre went, for references that have one.
+    pub manoeuvre: Option<ManoeuvreFigures>,
+}
+
+/// Tracking through a reference's manoeuvre (its window from `manoeuvre_window_s`), over the episodes
+/// that flew through it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ManoeuvreFigures {
+    pub start_s: f64,
+    pub end_s: f64,
+    /// Episodes that were still flying at the manoeuvre's end.
+    pub episodes: usize,
+    /// Largest position error during the manoeuvre: mean over episodes and worst.
+    pub mean_max_error_m: f64,
+    pub worst_max_error_m: f64,
+    /// Time after the manoeuvre until within [`REJOIN_DISTANCE_M`] of the target: median and worst
+    /// over the episodes that rejoined, and how many never did.
+    pub median_rejoin_s: f64,
+    pub worst_rejoin_s: f64,
+    pub never_rejoined: usize,
+}
+
+/// "Back on the path" after a manoeuvre.
+pub const REJOIN_DISTANCE_M: f64 = 0.5;
+
+impl ManoeuvreFigures {
+    pub fn of(results: &[EpisodeResult], (start_s, end_s): (f64, f64)) -> Self {
+        let through: Vec<&EpisodeResult> =
+            results.iter().filter(|r| r.steps.last().is_some_and(|s| s.time_s >= end_s)).collect();
+        let max_errors: Vec<f64> = through.iter().map(|r| r.max_error_between_m(start_s, end_s)).collect();
+        let mut rejoin: Vec<f64> = through.iter().filter_map(|r| r.time_to_rejoin_s(end_s, REJOIN_DISTANCE_M)).collect();
+        rejoin.sort_by(f64::total_cmp);
+        let n = max_errors.len();
+        Self {
+            start_s,
+            end_s,
+            episodes: n,
+            mean_max_error_m: if n == 0 { f64::NAN } else { max_errors.iter().sum::<f64>() / n as f64 },
+            worst_max_error_m: max_errors.iter().copied().fold(f64::NAN, f64::max),
+            median_rejoin_s: rejoin.get(rejoin.len() / 2).copied().unwrap_or(f64::NAN),
+            worst_rejoin_s: rejoin.last().copied().unwrap_or(f64::NAN),
+            never_rejoined: n - rejoin.len(),
+        }
+    }
 }
 
 impl TrackingSummary {
-    pub fn of(results: &[EpisodeResult], period_s: f64) -> Self {
+    /// Figures of `results`; `manoeuvre_window_s` (start, end) adds the manoeuvre's figures.
+    pub fn of(results: &[EpisodeResult], period_s: f64, manoeuvre_window_s: Option<(f64, f64)>) -> Self {
         let n = results.len().max(1) as f64;
         let mean = |f: &dyn Fn(&EpisodeResult) -> f64| results.iter().map(f).sum::<f64>() / n;
         let mut frequency_hz = [f64::NAN; 3];
@@ -68,6 +117,8 @@ impl TrackingSummary {
             energy_per_metre_j: mean(&|r| r.energy_per_metre_j(period_s)),
             frequency_hz,
             energy_fraction,
+            inverted_episodes: results.iter().filter(|r| r.went_inverted()).count(),
+            manoeuvre: manoeuvre_window_s.map(|window| ManoeuvreFigures::of(results, window)),
         }
     }
 
@@ -90,7 +141,15 @@ impl TrackingSummary {
             ("mechanical power (W), net".into(), format!("{:.2}", self.mean_power_w)),
             ("mechanical power (W), absolute".into(), format!("{:.2}", self.mean_absolute_power_w)),
             ("energy per metre (J/m)".into(), format!("{:.2}", self.energy_per_metre_j)),
+            ("episodes inverted (|roll| > 90 deg)".into(), format!("{}/{}", self.inverted_episodes, self.episodes)),
         ];
+        if let Some(m) = &self.manoeuvre {
+            rows.push((format!("manoeuvre {:.1}-{:.1} s: flown through", m.start_s, m.end_s), format!("{}/{}", m.episodes, self.episodes)));
+            let pair = |a: f64, b: f64| if a.is_nan() { "-".to_string() } else { format!("{a:.2} / {b:.2}") };
+            rows.push(("  max error in it (m), mean / worst".into(), pair(m.mean_max_error_m, m.worst_max_error_m)));
+            rows.push((format!("  back within {REJOIN_DISTANCE_M} m after (s), median / worst"), pair(m.median_rejoin_s, m.worst_rejoin_s)));
+            rows.push(("  never back within it".into(), m.never_rejoined.to_string()));
+        }
         for (k, joint) in ANALYSED_JOINTS.iter().enumerate() {
             rows.push((
                 format!("{} fundamental (Hz, energy)", joint.name()),
@@ -182,5 +241,25 @@ pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, 
         .collect();
     let joints = dir.join("joints.svg");
     write_joint_window(&window, "one second of episode 0", &joints)?;
-    Ok(vec![path_3d, path_views, error, joints])
+
+    let attitude = dir.join("attitude.svg");
+    let over_time = |name: &str, y_label, value: fn(&crate::tracking::TrackingStep) -> f64, with_reference: Option<fn(&crate::tracking::TrackingStep) -> f64>| {
+        let mut curves: Vec<Curve> = shown
+            .iter()
+            .enumerate()
+            .map(|(k, r)| curve(format!("episode {k}"), r.steps.iter().map(|s| (s.time_s, value(s))).collect(), k + 1, false))
+            .collect();
+        if let Some(target) = with_reference {
+            curves.insert(0, curve("reference".into(), first.steps.iter().map(|s| (s.time_s, target(s))).collect(), 0, true));
+        }
+        Panel { title: format!("{title}: {name}"), x_label: "time (s)", y_label, curves, equal_aspect: false }
+    };
+    let panels = [
+        over_time("altitude", "z (m)", |s| s.position_m.z, Some(|s| s.target_m.z)),
+        over_time("airspeed (pitot)", "m/s", |s| s.airspeed_mps, None),
+        over_time("roll", "deg", |s| s.euler_rad[0].to_degrees(), None),
+        over_time("pitch", "deg", |s| s.euler_rad[1].to_degrees(), None),
+    ];
+    draw(&attitude, (1100, 1000), &panels, (4, 1))?;
+    Ok(vec![path_3d, path_views, error, joints, attitude])
 }

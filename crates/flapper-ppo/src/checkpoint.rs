@@ -5,7 +5,8 @@
 //!
 //! A checkpoint holds everything a run needs to continue exactly: both networks, the log-std, the
 //! normalizer statistics, Adam's moments, the learning rate, the learner's random state, the
-//! iteration counter and the full config. A policy file holds the networks and normalizer only.
+//! iteration counter, the full config and the environments' state (every episode as it stands, so
+//! that a resumed run does not restart them). A policy file holds the networks and normalizer only.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -24,6 +25,7 @@ use crate::ppo::{Optimizer, Ppo};
 /// Bumped when the file layout changes.
 pub const FORMAT_VERSION: u32 = 1;
 const METADATA_KEY: &str = "flapper";
+const ENVIRONMENTS_TENSOR: &str = "environments.state";
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -100,6 +102,8 @@ pub struct Checkpoint {
     pub policy: ActorCritic,
     /// Present in checkpoints, absent in policy files.
     pub optimizer: Option<Optimizer>,
+    /// The environments' state ([`crate::VecEnv::save_state`]); present in checkpoints.
+    pub environments: Option<Vec<u8>>,
 }
 
 impl Checkpoint {
@@ -145,7 +149,14 @@ pub fn describe(ppo: &Ppo, kind: &str, iteration: usize, env_steps: u64, wall_ti
 
 /// Writes `policy` (and `optimizer`, for a resumable checkpoint) to `path` atomically, and the
 /// description to `path.json`.
-pub fn save(path: &Path, info: &CheckpointInfo, policy: &ActorCritic, optimizer: Option<&Optimizer>) -> Result<(), CheckpointError> {
+/// `environments` (for a checkpoint) is stored as one byte tensor, `environments.state`.
+pub fn save(
+    path: &Path,
+    info: &CheckpointInfo,
+    policy: &ActorCritic,
+    optimizer: Option<&Optimizer>,
+    environments: Option<&[u8]>,
+) -> Result<(), CheckpointError> {
     let mut tensors: Vec<(String, Dtype, Vec<usize>, Vec<u8>)> = Vec::new();
     let mut f32s = |name: String, shape: Vec<usize>, values: &[f32]| {
         tensors.push((name, Dtype::F32, shape, values.iter().flat_map(|v| v.to_le_bytes()).collect()));
@@ -167,6 +178,9 @@ pub fn save(path: &Path, info: &CheckpointInfo, policy: &ActorCritic, optimizer:
     tensors.push(("normalizer.mean".into(), Dtype::F64, vec![n.size()], f64s(&n.mean)));
     tensors.push(("normalizer.variance".into(), Dtype::F64, vec![n.size()], f64s(&n.variance)));
     tensors.push(("normalizer.count".into(), Dtype::F64, vec![1], f64s(&[n.count])));
+    if let Some(state) = environments {
+        tensors.push((ENVIRONMENTS_TENSOR.into(), Dtype::U8, vec![state.len()], state.to_vec()));
+    }
 
     let json = serde_json::to_string_pretty(info).expect("the description serializes");
     let views = tensors
@@ -277,7 +291,12 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     if info.kind == "checkpoint" && info.rng.as_ref().and_then(RngState::restore).is_none() {
         return Err(format("checkpoint without a valid random state".into()));
     }
-    Ok(Checkpoint { info, policy: ActorCritic { actor, critic, log_std, normalizer }, optimizer })
+    let environments = match tensors.tensor(ENVIRONMENTS_TENSOR) {
+        Ok(view) if view.dtype() == Dtype::U8 => Some(view.data().to_vec()),
+        Ok(view) => return Err(format(format!("tensor '{ENVIRONMENTS_TENSOR}' is {:?}, expected U8", view.dtype()))),
+        Err(_) => None,
+    };
+    Ok(Checkpoint { info, policy: ActorCritic { actor, critic, log_std, normalizer }, optimizer, environments })
 }
 
 fn parameter_count(sizes: &[usize]) -> Option<usize> {

@@ -96,8 +96,8 @@ pub struct RunnerConfig {
     pub seed: u64,
     /// Worker threads for environments and network maths (0 = one per core).
     pub threads: usize,
-    /// Save a checkpoint every this many iterations (and at the end). Environments restart at each
-    /// checkpoint, so that resuming replays the uninterrupted run exactly.
+    /// Save a checkpoint every this many iterations (and at the end). A checkpoint holds the
+    /// environments mid-episode, so that resuming continues the uninterrupted run exactly.
     pub checkpoint_every: usize,
 }
 

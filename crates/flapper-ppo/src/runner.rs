@@ -31,6 +31,8 @@ pub enum TrainError {
     NothingToResume(PathBuf),
     #[error("cannot write '{path}': {message}")]
     Output { path: PathBuf, message: String },
+    #[error("'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run with --init-from on it instead")]
+    NoEnvironmentState(PathBuf),
     #[error("the run reached {iterations} iterations already (checkpoint at iteration {done}); raise the iteration count to train further")]
     AlreadyDone { iterations: usize, done: usize },
 }
@@ -84,15 +86,6 @@ pub struct Trainer<E: VecEnv> {
     diagnostic_names: Vec<String>,
 }
 
-/// The seed environments restart from at `iteration` (a fixed function of the run seed).
-fn restart_seed(seed: u64, iteration: usize) -> u64 {
-    // SplitMix64 of (seed, iteration): distinct, well-mixed streams per restart.
-    let mut z = seed ^ (iteration as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 pub fn checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints")
 }
@@ -115,7 +108,7 @@ impl<E: VecEnv> Trainer<E> {
     /// Prepares a run in `dir`. For `Start::Resume` the caller passes the config the run was started
     /// with (`config.toml` in the folder; `runner.iterations` may be raised).
     pub fn new(
-        env: E,
+        mut env: E,
         ppo_config: PpoConfig,
         runner: RunnerConfig,
         config_toml: String,
@@ -132,17 +125,33 @@ impl<E: VecEnv> Trainer<E> {
                 if latest_checkpoint(dir).is_some() || dir.join("training.csv").exists() {
                     return Err(TrainError::RunExists(dir.to_owned()));
                 }
-                let policy = match &start {
+                let loaded = match &start {
                     Start::InitFrom(path) => {
                         let loaded = checkpoint::load(path)?;
                         loaded.check_layout(path, o, a)?;
-                        loaded.policy
+                        Some(loaded)
                     }
-                    _ => ActorCritic::new(o, a, &ppo_config, &mut rng),
+                    _ => None,
                 };
                 std::fs::create_dir_all(checkpoint_dir(dir)).map_err(|e| output(dir, &e))?;
                 checkpoint::write_atomically(&dir.join("config.toml"), config_toml.as_bytes())?;
-                Ppo::new(policy, ppo_config, runner.envs, rng, threads)
+                match loaded {
+                    Some(loaded) => {
+                        // A trained policy is sharp (small action noise): a fresh Adam at the
+                        // initial step size moves it far in the first update (the stage-2 run saw a
+                        // KL of 75). Continue at the step size the source run ended with, and with
+                        // its Adam moments when the file is a checkpoint that holds them.
+                        let mut ppo = Ppo::new(loaded.policy, ppo_config, runner.envs, rng, threads);
+                        if ppo.config.schedule == crate::config::Schedule::Adaptive {
+                            ppo.learning_rate = loaded.info.learning_rate;
+                        }
+                        if let Some(optimizer) = loaded.optimizer {
+                            ppo.optimizer = optimizer;
+                        }
+                        ppo
+                    }
+                    None => Ppo::new(ActorCritic::new(o, a, &ppo_config, &mut rng), ppo_config, runner.envs, rng, threads),
+                }
             }
             Start::Resume => {
                 let path = latest_checkpoint(dir).ok_or_else(|| TrainError::NothingToResume(dir.to_owned()))?;
@@ -153,6 +162,8 @@ impl<E: VecEnv> Trainer<E> {
                 if loaded.info.iteration >= runner.iterations {
                     return Err(TrainError::AlreadyDone { iterations: runner.iterations, done: loaded.info.iteration });
                 }
+                let environments = loaded.environments.as_deref().ok_or_else(|| TrainError::NoEnvironmentState(path.clone()))?;
+                env.restore_state(environments).map_err(TrainError::Env)?;
                 iteration = loaded.info.iteration;
                 env_steps = loaded.info.env_steps;
                 wall_time_before_s = loaded.info.wall_time_s;
@@ -220,9 +231,6 @@ impl<E: VecEnv> Trainer<E> {
         let session_start = Instant::now();
         while self.iteration < self.runner.iterations {
             let began = Instant::now();
-            if self.iteration.is_multiple_of(self.runner.checkpoint_every) {
-                self.env.restart(restart_seed(self.runner.seed, self.iteration)).map_err(TrainError::Env)?;
-            }
             let (mut env_time, mut inference_time) = (0.0, 0.0);
             let mut reward_sum = 0.0f64;
             let mut diagnostic_sums = vec![0.0f64; n_diag];
@@ -285,7 +293,7 @@ impl<E: VecEnv> Trainer<E> {
             if last {
                 let path = self.dir.join("policy.safetensors");
                 let info = checkpoint::describe(&self.ppo, "policy", self.iteration, self.env_steps, log.wall_time_s, &self.config_toml);
-                checkpoint::save(&path, &info, &self.ppo.policy, None)?;
+                checkpoint::save(&path, &info, &self.ppo.policy, None, None)?;
                 break;
             }
         }
@@ -295,7 +303,8 @@ impl<E: VecEnv> Trainer<E> {
     fn save_checkpoint(&self, wall_time_s: f64) -> Result<(), TrainError> {
         let path = checkpoint_dir(&self.dir).join(format!("iter_{:06}.safetensors", self.iteration));
         let info = checkpoint::describe(&self.ppo, "checkpoint", self.iteration, self.env_steps, wall_time_s, &self.config_toml);
-        checkpoint::save(&path, &info, &self.ppo.policy, Some(&self.ppo.optimizer))?;
+        let environments = self.env.save_state().map_err(TrainError::Env)?;
+        checkpoint::save(&path, &info, &self.ppo.policy, Some(&self.ppo.optimizer), Some(&environments))?;
         Ok(())
     }
 

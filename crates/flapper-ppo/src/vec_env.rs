@@ -49,7 +49,10 @@ pub trait VecEnv {
         &[]
     }
 
-    /// Restarts every episode with random streams drawn from `seed` alone. The learner does this at
-    /// checkpoint boundaries, so that a run resumed from a checkpoint replays the uninterrupted one.
-    fn restart(&mut self, seed: u64) -> Result<(), EnvError>;
+    /// Everything the environments will do next depends on, as bytes (mid-episode states, random
+    /// streams). Checkpoints hold it, so that a resumed run continues the uninterrupted one exactly
+    /// without restarting any episode.
+    fn save_state(&self) -> Result<Vec<u8>, EnvError>;
+    /// Continues from bytes written by [`VecEnv::save_state`] of a batch built the same way.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), EnvError>;
 }

@@ -107,6 +107,31 @@ impl Simulator {
         self.data.forward();
     }
 
+    /// MuJoCo's full integration state (time, positions, velocities, controls, warm start, applied
+    /// forces): everything the next step depends on besides the model. With
+    /// [`Simulator::set_physics_state`] a run continues bit for bit (training checkpoints).
+    pub fn physics_state(&self) -> Vec<f64> {
+        self.data.state(MjtState::mjSTATE_INTEGRATION as u32).into_vec()
+    }
+
+    /// Restores a state read by [`Simulator::physics_state`] from a simulator of the same model, and
+    /// recomputes the derived quantities (positions of bodies, sensors) from it.
+    pub fn set_physics_state(&mut self, state: &[f64]) -> Result<(), ModelError> {
+        let expected = self.data.model().state_size(MjtState::mjSTATE_INTEGRATION as u32);
+        if state.len() != expected || !state.iter().all(|v| v.is_finite()) {
+            return Err(invalid(
+                "physics state".to_owned(),
+                format!("{} numbers", state.len()),
+                "must be the finite integration state of this model",
+            ));
+        }
+        self.data
+            .set_state(state, MjtState::mjSTATE_INTEGRATION as u32)
+            .map_err(|e| invalid("physics state".to_owned(), e.to_string(), "MuJoCo rejected it"))?;
+        self.data.forward();
+        Ok(())
+    }
+
     /// Sets the PD position targets of the five joints (radians, order q1..q5). MuJoCo clamps
     /// them to each actuator's control range.
     pub fn set_joint_targets(&mut self, targets_rad: &[f64; N_ACTUATED_JOINTS]) {

@@ -100,6 +100,13 @@ pub struct ReferenceConfig {
     pub loop_probability: f64,
     /// Duration of a full loop; half loops take half of it.
     pub loop_duration_s: f64,
+    /// Chance that a command slot holds a sharp level turn instead (paper Fig. 10a: 180 deg in 1.2 s),
+    /// drawn after the loop.
+    pub sharp_turn_probability: f64,
+    /// Heading change of a sharp turn (deg), drawn from this range, left or right with equal chance.
+    pub sharp_turn_deg: Interval,
+    /// Duration of a sharp turn (s).
+    pub sharp_turn_duration_s: Interval,
 }
 
 /// Paper III-E: the episode starts near the reference's start so the policy must recover and rejoin.
@@ -183,6 +190,9 @@ impl Default for ReferenceConfig {
             yaw_rate_degps: [0.0, 0.0],
             loop_probability: 0.0,
             loop_duration_s: 3.0,
+            sharp_turn_probability: 0.0,
+            sharp_turn_deg: [90.0, 180.0],
+            sharp_turn_duration_s: [1.2, 2.4],
         }
     }
 }
@@ -241,7 +251,8 @@ impl TaskConfig {
                 config.reference.forward_speed_mps = [3.0, 5.5];
                 config.reference.vertical_speed_mps = [-1.5, 1.0];
                 config.reference.yaw_rate_degps = [-60.0, 60.0];
-                config.reference.loop_probability = 0.1;
+                config.reference.loop_probability = 0.15;
+                config.reference.sharp_turn_probability = 0.15;
                 config.episode.attitude_termination = false;
                 config.randomization.enabled = stage == 4;
             }
@@ -337,6 +348,17 @@ impl TaskConfig {
         }
         if !(f.loop_duration_s >= 1.0) {
             return invalid("reference.loop_duration_s", f.loop_duration_s.to_string(), "must be at least 1 s");
+        }
+        if !(0.0..=1.0).contains(&f.sharp_turn_probability) {
+            return invalid("reference.sharp_turn_probability", f.sharp_turn_probability.to_string(), "must be in [0, 1]");
+        }
+        check_interval("reference.sharp_turn_deg", f.sharp_turn_deg)?;
+        if !(f.sharp_turn_deg[0] >= 0.0 && f.sharp_turn_deg[1] <= 360.0) {
+            return invalid("reference.sharp_turn_deg", format!("{:?}", f.sharp_turn_deg), "must lie in [0, 360] deg");
+        }
+        check_interval("reference.sharp_turn_duration_s", f.sharp_turn_duration_s)?;
+        if !(f.sharp_turn_duration_s[0] >= 0.2 && f.sharp_turn_duration_s[1] <= 60.0) {
+            return invalid("reference.sharp_turn_duration_s", format!("{:?}", f.sharp_turn_duration_s), "must lie in [0.2, 60] s");
         }
         let g = &self.randomization;
         for (key, interval) in [

@@ -1,7 +1,8 @@
 //! The paper's control loop (III-A): joint targets decided at 50 Hz, low-pass filtered at the
 //! 250 Hz simulation rate, applied to the joints' PD servos for 5 substeps.
 
-use flapper_sim::{InitialState, N_ACTUATED_JOINTS, SimFault, Simulator};
+use flapper_sim::{InitialState, ModelError, N_ACTUATED_JOINTS, SimFault, Simulator};
+use serde::{Deserialize, Serialize};
 
 use crate::action_filter::LowPassFilter;
 
@@ -30,12 +31,23 @@ pub struct ControlLoop {
 }
 
 /// Work the actuators did on the joints during one control step, integrated at the simulation rate.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointWork {
     /// Integral of sum(torque * joint velocity): positive work minus work absorbed (J).
     pub net_j: f64,
     /// Integral of sum(|torque * joint velocity|): every joule the motors move, either way (J).
     pub absolute_j: f64,
+}
+
+/// Everything a control loop carries from one step to the next (for exact checkpoints).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ControlLoopState {
+    /// MuJoCo's integration state ([`Simulator::physics_state`]).
+    pub physics: Vec<f64>,
+    /// The filter's output, one per joint (rad).
+    pub filter_rad: [f64; N_ACTUATED_JOINTS],
+    pub commanded_rad: [f64; N_ACTUATED_JOINTS],
+    pub last_step_work: JointWork,
 }
 
 impl ControlLoop {
@@ -70,6 +82,25 @@ impl ControlLoop {
             }
         }
         self.last_step_work = work;
+        Ok(())
+    }
+
+    /// The loop's state, to continue later with [`ControlLoop::restore`].
+    pub fn state(&self) -> ControlLoopState {
+        ControlLoopState {
+            physics: self.sim.physics_state(),
+            filter_rad: self.filter.output(),
+            commanded_rad: self.commanded,
+            last_step_work: self.last_step_work,
+        }
+    }
+
+    /// Continues from a state taken by [`ControlLoop::state`] on a loop with the same model.
+    pub fn restore(&mut self, state: &ControlLoopState) -> Result<(), ModelError> {
+        self.sim.set_physics_state(&state.physics)?;
+        self.filter.reset(state.filter_rad);
+        self.commanded = state.commanded_rad;
+        self.last_step_work = state.last_step_work;
         Ok(())
     }
 

@@ -6,11 +6,12 @@ use std::sync::Arc;
 use flapper_sim::{InitialState, ModelError, RobotModel, Vec3, quat_from_euler, quat_to_euler};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap};
 use crate::config::TaskConfig;
-use crate::control_loop::{ControlLoop, ControlLoopConfig};
-use crate::observation::{ObservationBuilder, ObservationLayout, read_frame};
+use crate::control_loop::{ControlLoop, ControlLoopConfig, ControlLoopState};
+use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
 use crate::reference::generator::procedural;
 use crate::reference::Reference;
@@ -46,6 +47,21 @@ pub struct EpisodeInfo {
     pub end: EpisodeEnd,
 }
 
+/// An environment mid-episode, enough to continue it bit for bit: the random stream as it was when the
+/// episode began (replaying the reset redraws the same reference, dynamics and start) and the state
+/// that has evolved since. Training checkpoints hold one per environment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EnvSnapshot {
+    rng_at_reset: ChaCha8Rng,
+    control: ControlLoopState,
+    history: Vec<Frame>,
+    step: usize,
+    time_limit_steps: usize,
+    previous_action: [f32; ACTION_SIZE],
+    episode_return: f64,
+    term_sums: RewardTerms,
+}
+
 pub struct FlightEnv {
     config: Arc<TaskConfig>,
     control: ControlLoop,
@@ -54,8 +70,13 @@ pub struct FlightEnv {
     source: ReferenceSource,
     reference: Arc<Reference>,
     rng: ChaCha8Rng,
+    /// `rng` as it was when the current episode began.
+    rng_at_reset: ChaCha8Rng,
     index: usize,
     step: usize,
+    /// Steps after which this episode is truncated: `episode.max_steps`, except for a first episode
+    /// shortened by [`FlightEnv::shorten_episode`].
+    time_limit_steps: usize,
     previous_action: [f32; ACTION_SIZE],
     episode_return: f64,
     term_sums: RewardTerms,
@@ -88,9 +109,11 @@ impl FlightEnv {
             observation: ObservationBuilder::new(layout),
             source,
             reference: placeholder,
+            rng_at_reset: rng.clone(),
             rng,
             index,
             step: 0,
+            time_limit_steps: 0,
             previous_action: [0.0; ACTION_SIZE],
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
@@ -113,6 +136,8 @@ impl FlightEnv {
 
     /// Starts a new episode: reference, dynamics, initial state.
     pub fn reset(&mut self) -> Result<(), ModelError> {
+        self.rng_at_reset = self.rng.clone();
+        self.time_limit_steps = self.config.episode.max_steps;
         let dt = self.control.control_period_s();
         let lookahead = self.config.observation.lookahead_steps;
         self.reference = match &self.source {
@@ -183,7 +208,7 @@ impl FlightEnv {
             Some(EpisodeEnd::SimulationFault)
         } else if let Some(failure) = check_failure(&self.config.episode, error, roll, pitch) {
             Some(failure)
-        } else if self.step >= self.config.episode.max_steps {
+        } else if self.step >= self.time_limit_steps {
             Some(EpisodeEnd::TimeLimit)
         } else if self.step + 1 >= self.reference.steps_with_full_lookahead(self.config.observation.lookahead_steps) {
             Some(EpisodeEnd::ReferenceEnd)
@@ -198,6 +223,49 @@ impl FlightEnv {
         self.episode_return += reward;
         self.term_sums.add(&terms);
         StepResult { reward, terms, end }
+    }
+
+    /// Truncates the current episode after `steps` steps instead of `episode.max_steps` (at least
+    /// one step more than taken so far). Training shortens each environment's first episode by a
+    /// different amount so that episodes do not all start and end together.
+    pub fn shorten_episode(&mut self, steps: usize) {
+        self.time_limit_steps = steps.clamp(self.step + 1, self.config.episode.max_steps);
+    }
+
+    /// The episode as it stands, to continue later with [`FlightEnv::restore`].
+    pub fn snapshot(&self) -> EnvSnapshot {
+        EnvSnapshot {
+            rng_at_reset: self.rng_at_reset.clone(),
+            control: self.control.state(),
+            history: self.observation.history(),
+            step: self.step,
+            time_limit_steps: self.time_limit_steps,
+            previous_action: self.previous_action,
+            episode_return: self.episode_return,
+            term_sums: self.term_sums,
+        }
+    }
+
+    /// Continues the episode of `snapshot`, taken from an environment with the same model, task and
+    /// index: replays its reset, then restores what evolved since.
+    pub fn restore(&mut self, snapshot: &EnvSnapshot) -> Result<(), ModelError> {
+        let index = self.index;
+        let invalid = move |why| ModelError::InvalidValue { what: "environment snapshot".into(), value: format!("environment {index}"), why };
+        if snapshot.time_limit_steps > self.config.episode.max_steps || snapshot.step >= snapshot.time_limit_steps {
+            return Err(invalid("its episode does not fit this task's time limit"));
+        }
+        self.rng = snapshot.rng_at_reset.clone();
+        self.reset()?;
+        self.control.restore(&snapshot.control)?;
+        if !self.observation.restore_history(&snapshot.history) {
+            return Err(invalid("its observation history does not fit this task's layout"));
+        }
+        self.step = snapshot.step;
+        self.time_limit_steps = snapshot.time_limit_steps;
+        self.previous_action = snapshot.previous_action;
+        self.episode_return = snapshot.episode_return;
+        self.term_sums = snapshot.term_sums;
+        Ok(())
     }
 
     /// Writes the current observation into `out` (length `observation_layout().size()`).

@@ -103,6 +103,21 @@ impl ObservationBuilder {
         self.history.extend(std::iter::repeat_n(frame, self.layout.history_frames));
     }
 
+    /// The frames held, oldest first.
+    pub fn history(&self) -> Vec<Frame> {
+        self.history.iter().copied().collect()
+    }
+
+    /// Replaces the history with `frames` (oldest first); false if their number does not fit the layout.
+    pub fn restore_history(&mut self, frames: &[Frame]) -> bool {
+        if frames.len() != self.layout.history_frames {
+            return false;
+        }
+        self.history.clear();
+        self.history.extend(frames.iter().copied());
+        true
+    }
+
     pub fn push(&mut self, frame: Frame) {
         if self.history.len() == self.layout.history_frames {
             self.history.pop_front();

@@ -13,7 +13,7 @@
 use crate::config::RewardConfig;
 
 /// Each term's kernel value, in (0, 1]. Logged separately.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RewardTerms {
     pub position: f64,
     pub body_rate: f64,

@@ -5,13 +5,24 @@
 use std::sync::Arc;
 
 use flapper_sim::{ModelError, RobotModel};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use crate::action::ACTION_SIZE;
 use crate::config::TaskConfig;
-use crate::env::{EpisodeInfo, FlightEnv, ReferenceSource};
+use crate::env::{EnvSnapshot, EpisodeInfo, FlightEnv, ReferenceSource};
 use crate::reward::RewardTerms;
 use crate::termination::EpisodeEnd;
+
+/// Every environment mid-episode (see [`EnvSnapshot`]) and the fault count: a training checkpoint's
+/// record of the environments, so that a resumed run continues exactly where it stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VecEnvSnapshot {
+    envs: Vec<EnvSnapshot>,
+    simulation_faults: u64,
+}
 
 /// The batch of environments and the buffers a learner reads after each step.
 pub struct FlightVecEnv {
@@ -19,7 +30,7 @@ pub struct FlightVecEnv {
     pool: rayon::ThreadPool,
     observation_size: usize,
     observations: Vec<f32>,
-    /// Last observation of each episode truncated at the last step (other rows stale).
+    /// Observation to bootstrap each episode truncated at the last step from (other rows stale).
     final_observations: Vec<f32>,
     rewards: Vec<f32>,
     terminated: Vec<bool>,
@@ -113,7 +124,11 @@ impl FlightVecEnv {
                     *terminated = result.end.is_some_and(EpisodeEnd::is_termination);
                     *truncated = result.end.is_some_and(|e| !e.is_termination());
                     let info = result.end.map(|end| env.episode_info(end));
-                    if *truncated {
+                    if result.end == Some(EpisodeEnd::SimulationFault) {
+                        // The state after a fault is broken: bootstrap from the last sound
+                        // observation, the one this step's action was chosen on (still in `out`).
+                        final_out.copy_from_slice(out);
+                    } else if *truncated {
                         env.observe(final_out);
                     }
                     if info.is_some() {
@@ -144,8 +159,45 @@ impl FlightVecEnv {
         Ok(())
     }
 
-    /// For each environment truncated at the last step, its final observation before the reset
-    /// (for bootstrapping the value of the cut-off future). Rows of other environments are stale.
+    /// Shortens each environment's current (first) episode to a time limit drawn uniformly from
+    /// 1..=`episode.max_steps` with `seed`, as rsl_rl's random initial episode length does: without
+    /// it, every episode of a batch launches and reaches the time limit at the same step, and the
+    /// learner sees bursts of launches and of truncations.
+    pub fn spread_first_time_limits(&mut self, seed: u64) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for env in &mut self.envs {
+            let max_steps = env.config().episode.max_steps;
+            env.shorten_episode(rng.random_range(1..=max_steps));
+        }
+    }
+
+    /// Every environment as it stands (between steps), to continue later with [`FlightVecEnv::restore`].
+    pub fn snapshot(&self) -> VecEnvSnapshot {
+        let envs = self.pool.install(|| self.envs.par_iter().map(FlightEnv::snapshot).collect());
+        VecEnvSnapshot { envs, simulation_faults: self.simulation_faults }
+    }
+
+    /// Continues from `snapshot`, taken from a batch of as many environments with the same model, task
+    /// and seed. Episodes finished since the last [`FlightVecEnv::take_finished_episodes`] are dropped.
+    pub fn restore(&mut self, snapshot: &VecEnvSnapshot) -> Result<(), ModelError> {
+        if snapshot.envs.len() != self.envs.len() {
+            return Err(ModelError::InvalidValue {
+                what: "environment snapshot".into(),
+                value: format!("{} environments", snapshot.envs.len()),
+                why: "the batch has another number of environments",
+            });
+        }
+        self.pool.install(|| self.envs.par_iter_mut().zip(&snapshot.envs).try_for_each(|(env, s)| env.restore(s)))?;
+        self.simulation_faults = snapshot.simulation_faults;
+        self.finished.clear();
+        self.observe_all();
+        Ok(())
+    }
+
+    /// For each environment truncated at the last step, the observation to bootstrap the value of
+    /// its cut-off future from: its final observation before the reset, or after a simulation fault
+    /// the last observation before the fault (the broken state is never observed). Rows of other
+    /// environments are stale.
     pub fn final_observations(&self) -> &[f32] {
         &self.final_observations
     }

@@ -221,6 +221,9 @@ fn finished_episodes_reset_automatically_and_report_why() {
 #[test]
 fn a_simulation_fault_ends_only_that_episode_and_is_counted() {
     let mut envs = FlightVecEnv::new(&robot(), TaskConfig::default(), ReferenceSource::Procedural, 4, 5, 2).unwrap();
+    envs.step(&[0.0; 20]).unwrap();
+    let size = envs.observation_size();
+    let before_fault = envs.observations()[2 * size..3 * size].to_vec();
     envs.envs_mut()[2].sim_mut().set_wind(Vec3::new(1e12, 0.0, 0.0)).unwrap();
     envs.step(&[0.0; 20]).unwrap();
     let infos = envs.take_finished_episodes();
@@ -228,6 +231,10 @@ fn a_simulation_fault_ends_only_that_episode_and_is_counted() {
     assert_eq!((infos[0].env_index, infos[0].end), (2, EpisodeEnd::SimulationFault));
     assert_eq!(envs.simulation_faults(), 1);
     assert!(envs.truncated()[2] && !envs.terminated()[2]);
+    assert_eq!(envs.rewards()[2], 0.0, "a broken state earns nothing");
+    // The learner bootstraps a truncated episode from its final observation: after a fault that is
+    // the last sound one (the observation the faulting action was chosen on), never the broken state.
+    assert_eq!(&envs.final_observations()[2 * size..3 * size], before_fault.as_slice());
     assert!(envs.observations().iter().all(|x| x.is_finite()));
     // The faulted environment was reset with nominal wind and flies on.
     assert_eq!(envs.envs()[2].control().sim().wind(), Vec3::ZERO);
@@ -258,4 +265,67 @@ fn a_truncated_episode_keeps_its_final_observation_and_restart_replays_the_start
     // Restarting from the construction seed gives the first episode's start again.
     envs.restart(11).unwrap();
     assert_eq!(envs.observations(), first.as_slice());
+}
+
+/// Steps `envs` with a flapping pattern for `steps` steps; returns every reward and finished episode.
+fn fly(envs: &mut FlightVecEnv, steps: usize, from: usize) -> (Vec<f32>, Vec<(usize, usize, EpisodeEnd)>) {
+    let n = envs.len();
+    let (mut rewards, mut ends) = (Vec::new(), Vec::new());
+    for k in from..from + steps {
+        let phase = k as f32 * 0.66;
+        let actions: Vec<f32> = (0..n).flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32]).collect();
+        envs.step(&actions).unwrap();
+        rewards.extend_from_slice(envs.rewards());
+        ends.extend(envs.take_finished_episodes().into_iter().map(|e| (e.env_index, e.length, e.end)));
+    }
+    (rewards, ends)
+}
+
+#[test]
+fn a_snapshot_continues_every_episode_bit_for_bit() {
+    // Stage 4: procedural references, randomized dynamics and wind, all redrawn from the snapshot.
+    let config = TaskConfig::stage(4).unwrap();
+    let mut original = FlightVecEnv::new(&robot(), config.clone(), ReferenceSource::Procedural, 5, 21, 2).unwrap();
+    original.spread_first_time_limits(3);
+    fly(&mut original, 37, 0);
+    let snapshot = original.snapshot();
+    // Another batch of the same seed, elsewhere in its own episodes, takes over from the snapshot.
+    let mut resumed = FlightVecEnv::new(&robot(), config, ReferenceSource::Procedural, 5, 21, 1).unwrap();
+    fly(&mut resumed, 11, 0);
+    resumed.restore(&snapshot).unwrap();
+    assert_eq!(resumed.observations(), original.observations());
+    let a = fly(&mut original, 400, 37);
+    let b = fly(&mut resumed, 400, 37);
+    assert!(!a.1.is_empty(), "episodes end and restart within the comparison");
+    assert_eq!(a, b);
+    assert_eq!(resumed.observations(), original.observations());
+    // A snapshot of another batch size is refused.
+    let mut other = FlightVecEnv::new(&robot(), TaskConfig::stage(4).unwrap(), ReferenceSource::Procedural, 4, 21, 1).unwrap();
+    assert!(other.restore(&snapshot).is_err());
+}
+
+#[test]
+fn first_episodes_end_at_spread_out_times_and_later_ones_run_full_length() {
+    let mut config = exact_start(TaskConfig::default());
+    config.episode.max_steps = 40;
+    let north = ReferenceSource::Fixed(northbound());
+    let mut envs = FlightVecEnv::new(&robot(), config, north, 16, 9, 2).unwrap();
+    envs.spread_first_time_limits(4);
+    let mut first_lengths = vec![None; 16];
+    let mut later_lengths = Vec::new();
+    for _ in 0..120 {
+        envs.step(&[0.0; 80]).unwrap();
+        for e in envs.take_finished_episodes() {
+            assert_eq!(e.end, EpisodeEnd::TimeLimit, "a gliding robot stays within 3 m for 40 steps");
+            match first_lengths[e.env_index] {
+                None => first_lengths[e.env_index] = Some(e.length),
+                Some(_) => later_lengths.push(e.length),
+            }
+        }
+    }
+    let first: Vec<usize> = first_lengths.into_iter().map(|l| l.expect("every first episode ended")).collect();
+    let distinct: std::collections::HashSet<_> = first.iter().collect();
+    assert!(distinct.len() >= 8, "first episodes end at many different steps: {first:?}");
+    assert!(first.iter().all(|&l| (1..=40).contains(&l)));
+    assert!(!later_lengths.is_empty() && later_lengths.iter().all(|&l| l == 40), "{later_lengths:?}");
 }

@@ -9,15 +9,20 @@ use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
 /// Names of the diagnostics: each reward kernel's value in (0, 1], before weighting.
 pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level", "r_energy"];
 
+/// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
+const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
+
 pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
 }
 
 impl FlightEnvs {
-    /// `count` environments on procedural references from `task` on `threads` threads (0 = all cores).
+    /// `count` environments on procedural references from `task` on `threads` threads (0 = all cores),
+    /// their first episodes cut at spread-out lengths so that launches do not come in bursts.
     pub fn new(robot: &RobotModel, task: TaskConfig, count: usize, seed: u64, threads: usize) -> Result<Self, ModelError> {
-        let inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
+        let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
+        inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
         Ok(Self { diagnostics: vec![0.0; count * REWARD_TERM_NAMES.len()], inner })
     }
 
@@ -87,7 +92,12 @@ impl VecEnv for FlightEnvs {
         &self.diagnostics
     }
 
-    fn restart(&mut self, seed: u64) -> Result<(), EnvError> {
-        Ok(self.inner.restart(seed)?)
+    fn save_state(&self) -> Result<Vec<u8>, EnvError> {
+        Ok(serde_json::to_vec(&self.inner.snapshot())?)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), EnvError> {
+        let snapshot: flapper_task::vec_env::VecEnvSnapshot = serde_json::from_slice(state)?;
+        Ok(self.inner.restore(&snapshot)?)
     }
 }

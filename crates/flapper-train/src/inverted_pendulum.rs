@@ -84,9 +84,29 @@ impl InvertedPendulumEnvs {
             truncated: vec![false; count],
             finished: Vec::new(),
         };
-        vec_env.restart(seed)?;
+        vec_env.seed_streams(seed);
         Ok(vec_env)
     }
+
+    /// Gives every pendulum its own random stream from (`seed`, its index) and starts an episode.
+    fn seed_streams(&mut self, seed: u64) {
+        for (i, env) in self.envs.iter_mut().enumerate() {
+            env.rng = ChaCha8Rng::seed_from_u64(seed);
+            env.rng.set_stream(i as u64);
+            env.reset();
+            env.observe(&mut self.observations[i * OBSERVATION_SIZE..(i + 1) * OBSERVATION_SIZE]);
+        }
+        self.finished.clear();
+    }
+}
+
+/// One pendulum mid-episode: MuJoCo's integration state, the random stream, the episode so far.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PendulumSnapshot {
+    physics: Vec<f64>,
+    rng: ChaCha8Rng,
+    steps: usize,
+    episode_return: f64,
 }
 
 impl VecEnv for InvertedPendulumEnvs {
@@ -162,11 +182,31 @@ impl VecEnv for InvertedPendulumEnvs {
         vec![FELL, TIME_LIMIT]
     }
 
-    fn restart(&mut self, seed: u64) -> Result<(), EnvError> {
-        for (i, env) in self.envs.iter_mut().enumerate() {
-            env.rng = ChaCha8Rng::seed_from_u64(seed);
-            env.rng.set_stream(i as u64);
-            env.reset();
+    fn save_state(&self) -> Result<Vec<u8>, EnvError> {
+        let snapshots: Vec<PendulumSnapshot> = self
+            .envs
+            .iter()
+            .map(|env| PendulumSnapshot {
+                physics: env.data.state(MjtState::mjSTATE_INTEGRATION as u32).into_vec(),
+                rng: env.rng.clone(),
+                steps: env.steps,
+                episode_return: env.episode_return,
+            })
+            .collect();
+        Ok(serde_json::to_vec(&snapshots)?)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), EnvError> {
+        let snapshots: Vec<PendulumSnapshot> = serde_json::from_slice(state)?;
+        if snapshots.len() != self.envs.len() {
+            return Err(format!("saved state holds {} pendulums, this batch {}", snapshots.len(), self.envs.len()).into());
+        }
+        for (i, (env, saved)) in self.envs.iter_mut().zip(snapshots).enumerate() {
+            env.data.set_state(&saved.physics, MjtState::mjSTATE_INTEGRATION as u32).map_err(|e| format!("pendulum state: {e}"))?;
+            env.data.forward();
+            env.rng = saved.rng;
+            env.steps = saved.steps;
+            env.episode_return = saved.episode_return;
             env.observe(&mut self.observations[i * OBSERVATION_SIZE..(i + 1) * OBSERVATION_SIZE]);
         }
         self.finished.clear();

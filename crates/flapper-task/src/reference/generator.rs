@@ -88,7 +88,8 @@ pub fn build(name: &str, pieces: &[Piece], start: Vec3, yaw_rad: f64, dt_s: f64)
 }
 
 /// A seeded random reference of at least `duration_s` (plus `extra_s` to cover the lookahead) from
-/// a stage's ranges: one piece per `command_duration_s`, a loop with `loop_probability`.
+/// a stage's ranges: one piece per slot, a loop with `loop_probability`, else a sharp turn with
+/// `sharp_turn_probability`, else a command held `command_duration_s`.
 pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s: f64, rng: &mut impl Rng) -> Reference {
     let mut pieces = Vec::new();
     let mut total = 0.0;
@@ -99,7 +100,14 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
     while total < duration_s + extra_s {
         let speed = if first { cruise_speed } else { uniform(rng, config.forward_speed_mps) };
         let is_loop = !first && config.loop_probability > 0.0 && rng.random_bool(config.loop_probability);
-        let piece = if is_loop {
+        let is_sharp_turn =
+            !first && !is_loop && config.sharp_turn_probability > 0.0 && rng.random_bool(config.sharp_turn_probability);
+        let piece = if is_sharp_turn {
+            let side = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            let angle = uniform(rng, config.sharp_turn_deg).to_radians() * side;
+            let duration_s = uniform(rng, config.sharp_turn_duration_s);
+            Piece::Command { forward_speed_mps: speed, vertical_speed_mps: 0.0, yaw_rate_radps: angle / duration_s, duration_s }
+        } else if is_loop {
             let kind = [LoopKind::BackFlip, LoopKind::Immelmann, LoopKind::RollOffTheBottom][rng.random_range(0..3)];
             let duration_s =
                 if kind == LoopKind::BackFlip { config.loop_duration_s } else { 0.5 * config.loop_duration_s };

@@ -73,6 +73,22 @@ pub fn named_pieces(name: &str) -> Option<Vec<Piece>> {
     Some(pieces)
 }
 
+/// When the manoeuvre of a named reference happens: from the start of its first piece that is not
+/// straight and level to the end of its last one (s from the reference's start); `None` for a
+/// reference that is straight and level throughout or an unknown name.
+pub fn manoeuvre_window_s(name: &str) -> Option<(f64, f64)> {
+    let pieces = named_pieces(name)?;
+    let is_cruise = |p: &Piece| matches!(p, Piece::Command { vertical_speed_mps, yaw_rate_radps, .. } if *vertical_speed_mps == 0.0 && *yaw_rate_radps == 0.0);
+    let duration = |p: &Piece| match p {
+        Piece::Command { duration_s, .. } | Piece::Loop { duration_s, .. } => *duration_s,
+    };
+    let first = pieces.iter().position(|p| !is_cruise(p))?;
+    let last = pieces.iter().rposition(|p| !is_cruise(p))?;
+    let start: f64 = pieces[..first].iter().map(duration).sum();
+    let end: f64 = pieces[..=last].iter().map(duration).sum();
+    Some((start, end))
+}
+
 /// A named reference starting at `start` heading along +x, sampled every `dt_s`, followed by
 /// `extra_s` of straight flight at the final speed so the lookahead never runs off the end.
 pub fn named(name: &str, start: Vec3, dt_s: f64, extra_s: f64) -> Option<Reference> {
