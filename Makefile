@@ -2,7 +2,7 @@
 #   make demo    fly the shipped stage-2 policy (and the scripted baseline) on the paper's longitudinal
 #                reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
 #   make test    run the whole test suite (what CI runs)
-#   make train   train stages 1 and 2 from scratch into runs/stage1 and runs/stage2 (about 35 min on 2 cores)
+#   make train   train stages 1, 2 and 3 from scratch into runs/stage1..3 (see README, "Learned flight")
 #   make bench   simulator, environment, network and end-to-end training throughput
 .PHONY: demo test train bench baseline mujoco
 
@@ -21,6 +21,7 @@ test: mujoco
 train: mujoco
 	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1
 	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
+	$(FLAPPER) train --config configs/stage3.toml --init-from runs/stage2/policy.safetensors --out runs/stage3
 
 bench: mujoco
 	$(FLAPPER) bench
