@@ -4,7 +4,12 @@
 #   make test    run the whole test suite (what CI runs)
 #   make train   train stages 1, 2 and 3 from scratch into runs/stage1..3 (see README, "Learned flight")
 #   make bench   simulator, environment, network and end-to-end training throughput
-.PHONY: demo test train bench baseline mujoco
+#   make evaluate  fly POLICY (default: the stage-3 policy) on every named reference, 100 randomized starts
+#                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
+.PHONY: demo test train bench baseline mujoco evaluate
+
+POLICY ?= policies/stage3/policy.safetensors
+REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
 
 CARGO ?= cargo
 FLAPPER = $(CARGO) run --release --quiet -p flapper-cli --
@@ -22,6 +27,11 @@ train: mujoco
 	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1
 	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
 	$(FLAPPER) train --config configs/stage3.toml --init-from runs/stage2/policy.safetensors --out runs/stage3
+
+evaluate: mujoco
+	@for r in $(REFERENCES); do \
+		$(FLAPPER) eval --policy $(POLICY) --reference $$r --episodes 100 --seed 11 --out run/evaluate/$$r --no-baseline || exit 1; \
+	done
 
 bench: mujoco
 	$(FLAPPER) bench

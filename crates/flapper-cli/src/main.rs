@@ -10,6 +10,7 @@ use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, Script
 use flapper_sim::RobotModel;
 
 mod eval;
+mod sysid;
 mod train;
 
 #[derive(Parser)]
@@ -102,6 +103,27 @@ enum Command {
         /// Do not fly the scripted baseline.
         #[arg(long)]
         no_baseline: bool,
+    },
+    /// Identify the closed loop (robot + policy) as third-order transfer functions from desired to
+    /// flown position per axis (paper IV-A): poles, zeros, DC gain, validation fit, stability and
+    /// minimum-phase verdicts; sysid.json, sysid_io.csv, pole-zero and validation plots.
+    Sysid {
+        /// Trained policy (a run's policy.safetensors or a checkpoint).
+        #[arg(long, value_name = "FILE")]
+        policy: PathBuf,
+        /// Seed of the perturbations' phases (identification and validation records differ).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// RMS of the target perturbation on each axis (m).
+        #[arg(long, default_value_t = 0.15)]
+        amplitude_m: f64,
+        /// Take as input the desired position this far ahead (s, up to the 0.6 s the policy sees
+        /// ahead); 0 is the paper's input, the current desired position.
+        #[arg(long, default_value_t = 0.0)]
+        input_lead_s: f64,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/sysid")]
+        out: PathBuf,
     },
     /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
     ExportPolicy {
@@ -201,6 +223,9 @@ fn run(cli: Cli) -> Result<()> {
             eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline)
         }
         Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
+        Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
+            sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)
+        }
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }

@@ -135,3 +135,48 @@ pub fn draw_paths_3d(path: &Path, title: &str, reference: &[(f64, f64, f64)], fl
     }
     root.present().map_err(|e| error(&e))
 }
+
+/// The poles (crosses) and zeros (circles) of one transfer function in the complex plane.
+pub struct PoleZeroMap {
+    pub title: String,
+    /// (real, imaginary) parts.
+    pub poles: Vec<(f64, f64)>,
+    pub zeros: Vec<(f64, f64)>,
+}
+
+/// Draws pole-zero maps side by side (the paper's Fig. 5), the imaginary axis marked, into an SVG file.
+pub fn draw_pole_zero_maps(path: &Path, maps: &[PoleZeroMap]) -> Result<(), String> {
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let root = SVGBackend::new(path, (420 * maps.len().max(1) as u32, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| error(&e))?;
+    for (area, map) in root.split_evenly((1, maps.len().max(1))).iter().zip(maps) {
+        draw_pole_zero(area, map).map_err(|e| error(&e))?;
+    }
+    root.present().map_err(|e| error(&e))
+}
+
+fn draw_pole_zero(area: &DrawingArea<SVGBackend, Shift>, map: &PoleZeroMap) -> Result<(), Box<dyn std::error::Error>> {
+    let all = map.poles.iter().chain(&map.zeros).filter(|(x, y)| x.is_finite() && y.is_finite());
+    let reach = all.fold(1.0f64, |m, &(x, y)| m.max(x.abs()).max(y.abs())) * 1.2;
+    let mut chart = ChartBuilder::on(area)
+        .caption(&map.title, ("sans-serif", 18))
+        .margin(8)
+        .x_label_area_size(35)
+        .y_label_area_size(45)
+        .build_cartesian_2d(-reach..reach, -reach..reach)?;
+    chart.configure_mesh().x_desc("real (1/s)").y_desc("imaginary (rad/s)").light_line_style(WHITE.mix(0.0)).draw()?;
+    chart.draw_series(LineSeries::new([(0.0, -reach), (0.0, reach)], BLACK.mix(0.4).stroke_width(1)))?;
+    chart.draw_series(LineSeries::new([(-reach, 0.0), (reach, 0.0)], BLACK.mix(0.2).stroke_width(1)))?;
+    let pole_color = COLORS[1];
+    chart
+        .draw_series(map.poles.iter().map(|&p| Cross::new(p, 7, pole_color.stroke_width(2))))?
+        .label("poles")
+        .legend(move |(x, y)| Cross::new((x + 10, y), 5, pole_color.stroke_width(2)));
+    let zero_color = COLORS[0];
+    chart
+        .draw_series(map.zeros.iter().map(|&z| Circle::new(z, 6, zero_color.stroke_width(2))))?
+        .label("zeros")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 5, zero_color.stroke_width(2)));
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    Ok(())
+}

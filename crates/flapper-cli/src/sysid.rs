@@ -1,0 +1,76 @@
+//! `flapper sysid`: identify the closed loop of a policy and print its transfer functions.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result, bail};
+use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
+use flapper_sim::RobotModel;
+use flapper_train::run::load_flight_policy;
+
+fn polynomial(coefficients: &[f64]) -> String {
+    let degree = coefficients.len().saturating_sub(1);
+    coefficients
+        .iter()
+        .enumerate()
+        .map(|(i, c)| match degree - i {
+            0 => format!("{c:+.4}"),
+            1 => format!("{c:+.4} s"),
+            p => format!("{c:+.4} s^{p}"),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn roots(pairs: &[[f64; 2]]) -> String {
+    pairs.iter().map(|[re, im]| if *im == 0.0 { format!("{re:.3}") } else { format!("{re:.3}{im:+.3}i") }).collect::<Vec<_>>().join(", ")
+}
+
+pub fn sysid_command(robot: &RobotModel, policy_path: &Path, seed: u64, amplitude_m: f64, input_lead_s: f64, out: &Path) -> Result<()> {
+    if !(amplitude_m.is_finite() && amplitude_m > 0.0 && amplitude_m <= 1.0) {
+        bail!("--amplitude-m must be in (0, 1] m, got {amplitude_m}");
+    }
+    let (policy, task) = load_flight_policy(policy_path)?;
+    if !(0.0..=0.6).contains(&input_lead_s) {
+        bail!("--input-lead-s must be in [0, 0.6] s (the policy's lookahead), got {input_lead_s}");
+    }
+    let settings = SysidSettings { seed, amplitude_m, input_lead_s, ..SysidSettings::default() };
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    eprintln!(
+        "flying {} identification and {} validation records of {:.0} s (cruise {} m/s, target perturbed by {} m RMS per axis, {}-{} Hz)...",
+        settings.identification_records, settings.validation_records, settings.record_s, settings.cruise_speed_mps, amplitude_m,
+        settings.band_hz[0], settings.band_hz[1]
+    );
+    let records = fly_records(robot, Arc::new(policy), &task, &settings)?;
+    let (report, models) = identify(&records, &settings)?;
+    let written = write_sysid_files(out, &report, &models, &records)?;
+    println!("closed loop of {}: desired position -> flown position (deviations from a 3.8 m/s cruise)", policy_path.display());
+    println!("common denominator: {}", polynomial(&report.common.x.denominator));
+    for (axis, m) in report.common.each() {
+        println!("Y_{axis}(s) = ({}) / D(s)", polynomial(&m.numerator));
+        println!("    poles {}; zeros {}; DC gain {:.3}", roots(&m.poles), roots(&m.zeros), m.dc_gain);
+        println!(
+            "    validation MSE {:.3e} m^2, fit {:.1}%; {}, {}",
+            m.mse_validation,
+            m.fit_percent,
+            if m.bibo_stable { "BIBO stable" } else { "NOT BIBO stable" },
+            if m.minimum_phase { "minimum phase" } else { "NOT minimum phase" }
+        );
+    }
+    println!("per-axis denominators (for comparison):");
+    for (axis, m) in report.per_axis_denominators.each() {
+        println!(
+            "  {axis}: poles {}; zeros {}; validation MSE {:.3e} m^2, fit {:.1}%; {}, {}",
+            roots(&m.poles),
+            roots(&m.zeros),
+            m.mse_validation,
+            m.fit_percent,
+            if m.bibo_stable { "BIBO stable" } else { "NOT BIBO stable" },
+            if m.minimum_phase { "minimum phase" } else { "NOT minimum phase" }
+        );
+    }
+    for path in written {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
