@@ -5,8 +5,28 @@
 //! - [`fit`]: third-order transfer functions fitted to input-output records (state-variable-filter
 //!   least squares), with one denominator shared by the axes or one per axis;
 //! - [`sysid`]: the identification experiment on a policy (perturbed cruise references flown from an
-//!   exact start), its report, files and plots.
+//!   exact start), its report, files and plots;
+//! - [`phase`]: phase portraits of the wings in cruise, climb and a left turn, and the paper's claims
+//!   about them checked;
+//! - [`modes`]: flight modes along the longitudinal reference (does the policy glide?).
 
 pub mod fit;
 pub mod linear_system;
+pub mod modes;
+pub mod phase;
 pub mod sysid;
+
+/// What can go wrong in an analysis: a flight the policy cannot make, a fit, an output file.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    #[error(transparent)]
+    Model(#[from] flapper_sim::ModelError),
+    #[error("the policy did not fly identification record {record} (seed {seed}): it ended '{end}' at {time_s:.1} s of {length_s:.0} s; it cannot cruise at 3.8 m/s with its target perturbed by {amplitude_m} m")]
+    RecordFailed { record: usize, seed: u64, end: &'static str, time_s: f64, length_s: f64, amplitude_m: f64 },
+    #[error("the policy cannot fly the {what}: it ended '{end}' at {time_s:.1} s")]
+    FlightFailed { what: String, end: &'static str, time_s: f64 },
+    #[error("the least-squares fit failed (too little data, or a constant input)")]
+    FitFailed,
+    #[error("cannot write '{path}': {message}")]
+    Write { path: std::path::PathBuf, message: String },
+}

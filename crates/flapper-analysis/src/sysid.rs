@@ -23,21 +23,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::fit::{FitSettings, Record, Validation, fit_common_denominator, validate};
+use crate::AnalysisError;
 use crate::linear_system::TransferFunction;
 
 pub const AXES: [&str; 3] = ["x", "y", "z"];
 
-#[derive(Debug, thiserror::Error)]
-pub enum SysidError {
-    #[error(transparent)]
-    Model(#[from] flapper_sim::ModelError),
-    #[error("the policy did not fly identification record {record} (seed {seed}): it ended '{end}' at {time_s:.1} s of {length_s:.0} s; it cannot cruise at 3.8 m/s with its target perturbed by {amplitude_m} m")]
-    RecordFailed { record: usize, seed: u64, end: &'static str, time_s: f64, length_s: f64, amplitude_m: f64 },
-    #[error("the least-squares fit failed (too little data, or a constant input)")]
-    FitFailed,
-    #[error("cannot write '{path}': {message}")]
-    Write { path: PathBuf, message: String },
-}
 
 /// The experiment's settings; the defaults are what `flapper sysid` runs.
 #[derive(Debug, Clone, Serialize)]
@@ -154,7 +144,7 @@ pub struct FlownRecord {
 }
 
 /// Flies the identification and validation records with `policy` on its `task` from an exact start.
-pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, s: &SysidSettings) -> Result<Vec<FlownRecord>, SysidError> {
+pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, s: &SysidSettings) -> Result<Vec<FlownRecord>, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -179,7 +169,7 @@ pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConf
             let flown = evaluate_tracking(robot, &pilot, &exact, reference, 1, seed)?.remove(0);
             let last_s = flown.steps.last().map_or(0.0, |st| st.time_s);
             if !flown.completed() {
-                return Err(SysidError::RecordFailed {
+                return Err(AnalysisError::RecordFailed {
                     record,
                     seed,
                     end: flown.end.name(),
@@ -274,14 +264,14 @@ pub struct SysidReport {
 }
 
 /// Fits both model forms to the identification records and validates them on the others.
-pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<(SysidReport, [TransferFunction; 3]), SysidError> {
+pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<(SysidReport, [TransferFunction; 3]), AnalysisError> {
     let settings = FitSettings { dt_s: CONTROL_PERIOD_S, filter_pole_radps: s.filter_pole_radps, skip_s: s.skip_s };
     let set = |which: DataSet, axis: usize| -> Vec<Record> { records.iter().filter(|r| r.set == which).map(|r| r.axes[axis].clone()).collect() };
     let identification: Vec<Vec<Record>> = (0..3).map(|a| set(DataSet::Identification, a)).collect();
-    let common = fit_common_denominator(&identification, &settings).ok_or(SysidError::FitFailed)?;
+    let common = fit_common_denominator(&identification, &settings).ok_or(AnalysisError::FitFailed)?;
     let mut separate = Vec::new();
     for axis in &identification {
-        separate.push(fit_common_denominator(std::slice::from_ref(axis), &settings).ok_or(SysidError::FitFailed)?.remove(0));
+        separate.push(fit_common_denominator(std::slice::from_ref(axis), &settings).ok_or(AnalysisError::FitFailed)?.remove(0));
     }
     let report_of = |models: &[TransferFunction]| {
         let m = |a: usize| AxisModel::of(&models[a], validate(&models[a], &set(DataSet::Validation, a), &settings));
@@ -293,7 +283,7 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<(SysidRepo
         per_axis_denominators: report_of(&separate),
         experiment: s.clone(),
     };
-    let common: [TransferFunction; 3] = common.try_into().map_err(|_| SysidError::FitFailed)?;
+    let common: [TransferFunction; 3] = common.try_into().map_err(|_| AnalysisError::FitFailed)?;
     Ok((report, common))
 }
 
@@ -311,8 +301,8 @@ struct IoRow {
 }
 
 /// Writes `sysid.json`, `sysid_io.csv`, `pole_zero.svg` and `validation.svg` into `dir`.
-pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFunction; 3], records: &[FlownRecord]) -> Result<Vec<PathBuf>, SysidError> {
-    let fail = |path: &Path, e: &dyn std::fmt::Display| SysidError::Write { path: path.to_owned(), message: e.to_string() };
+pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFunction; 3], records: &[FlownRecord]) -> Result<Vec<PathBuf>, AnalysisError> {
+    let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let json = dir.join("sysid.json");
     let text = serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?;
     std::fs::write(&json, text).map_err(|e| fail(&json, &e))?;

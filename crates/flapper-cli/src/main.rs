@@ -10,6 +10,8 @@ use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, Script
 use flapper_sim::RobotModel;
 
 mod eval;
+mod modes;
+mod phase;
 mod sysid;
 mod train;
 
@@ -125,6 +127,30 @@ enum Command {
         #[arg(long, default_value = "run/sysid")]
         out: PathBuf,
     },
+    /// Phase portraits of the wings (paper IV-B, Fig. 6-7): right wing in cruise vs climb at 3 m/s, left
+    /// vs right wing turning left (skipped for a policy that cannot turn); phase.json checks the
+    /// paper's claims; phase_climb.svg, phase_turn.svg.
+    Phase {
+        /// Trained policy (a run's policy.safetensors or a checkpoint).
+        #[arg(long, value_name = "FILE")]
+        policy: PathBuf,
+        /// Forward speed of the cruise and the climb (the paper: 3 m/s).
+        #[arg(long, default_value_t = 3.0)]
+        speed_mps: f64,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/phase")]
+        out: PathBuf,
+    },
+    /// Flight modes on the longitudinal reference: flap amplitude, frequency and power in the cruise,
+    /// climb, glide and dive segments, and whether the policy glides; modes.json, modes.svg.
+    Modes {
+        /// Trained policy (a run's policy.safetensors or a checkpoint).
+        #[arg(long, value_name = "FILE")]
+        policy: PathBuf,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/modes")]
+        out: PathBuf,
+    },
     /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
     ExportPolicy {
         /// A checkpoint (runs/NAME/checkpoints/iter_NNNNNN.safetensors).
@@ -223,6 +249,8 @@ fn run(cli: Cli) -> Result<()> {
             eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline)
         }
         Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
+        Command::Phase { policy, speed_mps, out } => phase::phase_command(&robot, &policy, speed_mps, &out),
+        Command::Modes { policy, out } => modes::modes_command(&robot, &policy, &out),
         Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
             sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)
         }

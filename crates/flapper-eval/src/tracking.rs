@@ -37,6 +37,7 @@ pub struct TrackingStep {
     pub airspeed_mps: f64,
     pub euler_rad: [f64; 3],
     pub joint_positions_rad: [f64; N_ACTUATED_JOINTS],
+    pub joint_velocities_radps: [f64; N_ACTUATED_JOINTS],
     /// PD targets after the 7 Hz filter.
     pub joint_targets_rad: [f64; N_ACTUATED_JOINTS],
     pub mechanical_power_w: f64,
@@ -191,6 +192,7 @@ fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize) -> EpisodeResu
             airspeed_mps: state.airspeed_mps,
             euler_rad: state.euler_rad,
             joint_positions_rad: state.joint_positions_rad,
+            joint_velocities_radps: state.joint_velocities_radps,
             joint_targets_rad: sim.joint_targets(),
             mechanical_power_w: work.net_j / control.control_period_s(),
             absolute_power_w: work.absolute_j / control.control_period_s(),

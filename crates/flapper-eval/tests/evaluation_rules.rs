@@ -44,6 +44,7 @@ fn step_at(time_s: f64, error_m: f64, roll_rad: f64) -> TrackingStep {
         airspeed_mps: 3.8,
         euler_rad: [roll_rad, 0.0, 0.0],
         joint_positions_rad: [0.0; 5],
+        joint_velocities_radps: [0.0; 5],
         joint_targets_rad: [0.0; 5],
         mechanical_power_w: 5.0,
         absolute_power_w: 10.0,

@@ -1,0 +1,36 @@
+//! `flapper modes`: flapping and power per segment of the longitudinal reference: does the policy glide?
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use flapper_analysis::modes::flight_modes;
+use flapper_sim::RobotModel;
+use flapper_train::run::load_flight_policy;
+
+pub fn modes_command(robot: &RobotModel, policy_path: &Path, out: &Path) -> Result<()> {
+    let (policy, task) = load_flight_policy(policy_path)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    let (report, written) = flight_modes(robot, Arc::new(policy), &task, out)?;
+    println!("flight modes of {} on the longitudinal reference (exact start):", policy_path.display());
+    println!("{:<8} {:>9} {:>16} {:>14} {:>12} {:>14}  glides", "segment", "time (s)", "flap ampl. (deg)", "flap fund. (Hz)", "energy (%)", "power (W) net/abs");
+    for s in &report.segments {
+        println!(
+            "{:<8} {:>4.0}-{:<4.0} {:>16.1} {:>14.2} {:>12.0} {:>8.1} / {:<5.1}  {}",
+            s.segment,
+            s.start_s,
+            s.end_s,
+            s.flap_amplitude_deg,
+            s.flap_fundamental_hz,
+            100.0 * s.flap_energy_fraction,
+            s.mean_power_w,
+            s.mean_absolute_power_w,
+            if s.glides { "yes" } else { "no" }
+        );
+    }
+    println!("does it glide? {}", report.verdict);
+    for path in written {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

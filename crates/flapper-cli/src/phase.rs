@@ -1,0 +1,44 @@
+//! `flapper phase`: phase portraits of the wings and the paper's claims about them.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use flapper_analysis::phase::phase_portraits;
+use flapper_sim::RobotModel;
+use flapper_train::run::load_flight_policy;
+
+pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out: &Path) -> Result<()> {
+    if !(speed_mps.is_finite() && (2.0..=6.0).contains(&speed_mps)) {
+        anyhow::bail!("--speed-mps must be in [2, 6] m/s, got {speed_mps}");
+    }
+    let (policy, task) = load_flight_policy(policy_path)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    let (report, written) = phase_portraits(robot, Arc::new(policy), &task, speed_mps, out)?;
+    println!("phase portraits of {} (right wing; cruise and climb at {} m/s, climb {} m/s):", policy_path.display(), report.forward_speed_mps, report.climb_rate_mps);
+    for (flight, orbits) in [("cruise", &report.cruise), ("climb", &report.climb)] {
+        for (joint, o) in orbits.iter() {
+            println!(
+                "  {flight:<7} {joint:<12} mean {:>6.1} deg, amplitude {:>5.1} deg, velocity amplitude {:>5.0} deg/s, cycle spread {:>4.1}%",
+                o.mean_deg, o.amplitude_deg, o.velocity_amplitude_degps, o.orbit_spread_percent
+            );
+        }
+    }
+    match (&report.turn_left, &report.turn_skipped_because) {
+        (Some(orbits), _) => {
+            for (joint, o) in orbits.iter() {
+                println!("  turn L  {joint:<12} mean {:>6.1} deg, amplitude {:>5.1} deg, cycle spread {:>4.1}%", o.mean_deg, o.amplitude_deg, o.orbit_spread_percent);
+            }
+        }
+        (None, Some(why)) => println!("  left turn skipped: {why}"),
+        (None, None) => {}
+    }
+    println!("the paper's claims:");
+    for claim in &report.claims {
+        println!("  [{}] {} ({})", if claim.confirmed { "confirmed" } else { "NOT confirmed" }, claim.claim, claim.ours);
+    }
+    for path in written {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
