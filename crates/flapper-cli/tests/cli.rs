@@ -190,3 +190,62 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
     assert_one_line_error(&flapper(&["eval", "--policy", truncated.to_str().unwrap(), "--episodes", "1"]), "truncated.safetensors");
     assert_one_line_error(&flapper(&["eval", "--reference", "nowhere", "--episodes", "1"]), "unknown reference 'nowhere'");
 }
+
+fn shipped_policy(stage: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies").join(stage).join("policy.safetensors").display().to_string()
+}
+
+#[test]
+fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
+    let out = scratch("analysis");
+    let policy = shipped_policy("stage2");
+    let sysid = out.join("sysid");
+    let output = flapper(&["sysid", "--policy", &policy, "--out", sysid.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sysid.join("sysid.json")).unwrap()).unwrap();
+    for axis in ["x", "y", "z"] {
+        let m = &report[axis];
+        assert_eq!(m["denominator"].as_array().unwrap().len(), 4, "{m}");
+        assert_eq!(m["numerator"].as_array().unwrap().len(), 3);
+        assert_eq!(m["poles"].as_array().unwrap().len(), 3);
+        assert!(m["mse_validation"].as_f64().unwrap() > 0.0 && m["fit_percent"].as_f64().unwrap() > 0.0, "{m}");
+        assert!(m["bibo_stable"].is_boolean() && m["minimum_phase"].is_boolean());
+    }
+    let io = std::fs::read_to_string(sysid.join("sysid_io.csv")).unwrap();
+    assert!(io.starts_with("time_s,u_x,u_y,u_z,y_x,y_y,y_z,set\n"), "{}", &io[..80]);
+    assert!(io.contains(",identification\n") && io.contains(",validation\n"));
+    for file in ["pole_zero.svg", "validation.svg"] {
+        assert!(sysid.join(file).metadata().unwrap().len() > 1000, "{file}");
+    }
+
+    let phase = out.join("phase");
+    let output = flapper(&["phase", "--policy", &policy, "--speed-mps", "3.5", "--out", phase.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("left turn skipped: the policy cannot turn"), "stage 2 never learned to turn: {stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(phase.join("phase.json")).unwrap()).unwrap();
+    assert!(report["claims"].as_array().unwrap().iter().all(|c| c["confirmed"].is_boolean()));
+
+    let modes = out.join("modes");
+    let output = flapper(&["modes", "--policy", &policy, "--out", modes.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(modes.join("modes.json")).unwrap()).unwrap();
+    assert_eq!(report["segments"].as_array().unwrap().len(), 4);
+}
+
+#[test]
+fn analysis_commands_reject_bad_input_with_one_line() {
+    let out = scratch("analysis-bad");
+    let o = out.to_str().unwrap();
+    assert_one_line_error(&flapper(&["sysid", "--policy", "/no/such/policy.safetensors", "--out", o]), "/no/such/policy.safetensors");
+    let policy = shipped_policy("stage2");
+    assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--amplitude-m", "5", "--out", o]), "--amplitude-m");
+    assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]), "--input-lead-s");
+    assert_one_line_error(&flapper(&["phase", "--policy", &policy, "--speed-mps", "NaN", "--out", o]), "--speed-mps");
+    // A perturbation the policy cannot follow is reported as such (after the progress line), not as a bad fit.
+    let output = flapper(&["sysid", "--policy", &policy, "--amplitude-m", "1", "--out", o]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success() && !stderr.contains("panicked"), "{stderr}");
+    let last = stderr.trim_end().lines().last().unwrap();
+    assert!(last.starts_with("error: the policy did not fly identification record"), "{stderr}");
+}
