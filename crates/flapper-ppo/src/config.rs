@@ -137,6 +137,24 @@ impl PpoConfig {
                 return invalid(key, value.to_string(), "must be in [0, 1]");
             }
         }
+        for (key, value, max) in [("ppo.steps_per_env", self.steps_per_env, 10_000), ("ppo.epochs", self.epochs, 1000), ("ppo.minibatches", self.minibatches, 100_000)] {
+            if value > max {
+                return invalid(key, value.to_string(), "too large (steps_per_env <= 10000, epochs <= 1000, minibatches <= 100000)");
+            }
+        }
+        for (key, value, max) in [
+            ("ppo.clip", self.clip, 10.0),
+            ("ppo.max_grad_norm", self.max_grad_norm, 1e6),
+            ("ppo.learning_rate", self.learning_rate, 1.0),
+            ("ppo.desired_kl", self.desired_kl, 10.0),
+            ("ppo.init_noise_std", self.init_noise_std, 100.0),
+            ("ppo.value_loss_coef", self.value_loss_coef, 1e3),
+            ("ppo.entropy_coef", self.entropy_coef, 1e3),
+        ] {
+            if value > max {
+                return invalid(key, value.to_string(), "too large (clip <= 10, max_grad_norm <= 1e6, learning_rate <= 1, desired_kl <= 10, init_noise_std <= 100, coefficients <= 1000)");
+            }
+        }
         for (key, sizes) in [("ppo.actor_hidden", &self.actor_hidden), ("ppo.critic_hidden", &self.critic_hidden)] {
             if sizes.is_empty() || sizes.iter().any(|&s| s == 0 || s > 4096) {
                 return invalid(key, format!("{sizes:?}"), "needs at least one hidden layer, each of 1 to 4096 units");
@@ -152,8 +170,11 @@ impl RunnerConfig {
         if self.envs == 0 || self.envs > 65_536 {
             return invalid("runner.envs", self.envs.to_string(), "must be 1 to 65536");
         }
-        if self.iterations == 0 {
-            return invalid("runner.iterations", "0".into(), "must be at least 1");
+        if self.iterations == 0 || self.iterations > 10_000_000 {
+            return invalid("runner.iterations", self.iterations.to_string(), "must be 1 to 10000000");
+        }
+        if self.envs * ppo.steps_per_env > 4_000_000 {
+            return invalid("ppo.steps_per_env", ppo.steps_per_env.to_string(), "envs x steps_per_env must be at most 4000000 samples per rollout");
         }
         if self.checkpoint_every == 0 {
             return invalid("runner.checkpoint_every", "0".into(), "must be at least 1");

@@ -15,6 +15,10 @@ pub enum ConfigError {
     Parse { path: String, message: String },
     #[error("config value {key} = {value}: {why}")]
     Invalid { key: &'static str, value: String, why: &'static str },
+    #[error("config value {key} = {value}: must be a finite number in [{low}, {high}]")]
+    OutOfRange { key: &'static str, value: String, low: f64, high: f64 },
+    #[error("config value {key} = {value}: must be at most {max} (larger would not fit in memory or time)")]
+    TooLarge { key: &'static str, value: String, max: String },
     #[error("unknown curriculum stage {0} (stages are 1 to 4)")]
     UnknownStage(i64),
 }
@@ -287,9 +291,67 @@ impl TaskConfig {
         Ok(config)
     }
 
-    /// Rejects values no run could use.
+    /// Rejects values no run could use: every number finite, counts and durations bounded so that
+    /// no buffer outgrows memory (at most 100 000 steps of 30 ms-scale work per episode, 1000 history
+    /// frames or lookahead points, 100 substeps), offsets and rates within what the robot could meet.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let invalid = |key, value: String, why| Err(ConfigError::Invalid { key, value, why });
+        for (key, value, max) in [
+            ("control.substeps", self.control.substeps, 100),
+            ("observation.history_frames", self.observation.history_frames, 1000),
+            ("observation.lookahead_steps", self.observation.lookahead_steps, 1000),
+            ("episode.max_steps", self.episode.max_steps, 100_000),
+        ] {
+            if value > max {
+                return Err(ConfigError::TooLarge { key, value: value.to_string(), max: max.to_string() });
+            }
+        }
+        let i = &self.initial_state;
+        for (key, value, low, high) in [
+            ("initial_state.position_offset_m[0]", i.position_offset_m[0], 0.0, 10.0),
+            ("initial_state.position_offset_m[1]", i.position_offset_m[1], 0.0, 10.0),
+            ("initial_state.position_offset_m[2]", i.position_offset_m[2], 0.0, 10.0),
+            ("initial_state.speed_offset_mps", i.speed_offset_mps, 0.0, 10.0),
+            ("initial_state.pitch_deg", i.pitch_deg, -90.0, 90.0),
+            ("initial_state.attitude_offset_deg", i.attitude_offset_deg, 0.0, 180.0),
+            ("episode.attitude_limit_deg", self.episode.attitude_limit_deg, 1.0, 180.0),
+            ("episode.max_position_error_m", self.episode.max_position_error_m, 0.01, 100.0),
+            ("reference.command_duration_s", self.reference.command_duration_s, 0.1, 60.0),
+            ("reference.loop_duration_s", self.reference.loop_duration_s, 1.0, 60.0),
+            ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
+            ("reward.position_scale_m", self.reward.position_scale_m, 1e-3, 1e3),
+            ("reward.body_rate_scale_radps", self.reward.body_rate_scale_radps, 1e-3, 1e3),
+            ("reward.level_scale_rad", self.reward.level_scale_rad, 1e-3, 1e3),
+            ("reward.energy_scale_w", self.reward.energy_scale_w, 1e-3, 1e5),
+            ("reward.position_weight", self.reward.position_weight, 0.0, 1e3),
+            ("reward.body_rate_weight", self.reward.body_rate_weight, 0.0, 1e3),
+            ("reward.level_weight", self.reward.level_weight, 0.0, 1e3),
+            ("reward.energy_weight", self.reward.energy_weight, 0.0, 1e3),
+        ] {
+            if !(value >= low && value <= high) {
+                return Err(ConfigError::OutOfRange { key, value: value.to_string(), low, high });
+            }
+        }
+        for (key, interval, low, high) in [
+            ("reference.vertical_speed_mps", self.reference.vertical_speed_mps, -15.0, 15.0),
+            ("reference.yaw_rate_degps", self.reference.yaw_rate_degps, -720.0, 720.0),
+        ] {
+            if !(interval[0] >= low && interval[1] <= high) {
+                return Err(ConfigError::OutOfRange { key, value: format!("{interval:?}"), low, high });
+            }
+        }
+        for (key, interval) in [
+            ("randomization.joint_damping_scale", self.randomization.joint_damping_scale),
+            ("randomization.link_mass_scale", self.randomization.link_mass_scale),
+            ("randomization.link_inertia_scale", self.randomization.link_inertia_scale),
+            ("randomization.fluid_coefficient_scale", self.randomization.fluid_coefficient_scale),
+            ("randomization.added_mass_scale", self.randomization.added_mass_scale),
+            ("randomization.added_inertia_scale", self.randomization.added_inertia_scale),
+        ] {
+            if !(interval[1] <= 10.0) {
+                return Err(ConfigError::Invalid { key, value: format!("{interval:?}"), why: "scales must be at most 10" });
+            }
+        }
         if self.control.substeps == 0 {
             return invalid("control.substeps", "0".into(), "must be at least 1");
         }
@@ -463,5 +525,30 @@ mod tests {
         let err = TaskConfig::from_toml("[reference]\nforward_speed_mps = [5.0, 3.0]\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("forward_speed_mps"), "{err}");
         assert!(TaskConfig::from_toml("[control\n", "broken.toml").unwrap_err().to_string().contains("broken.toml"));
+    }
+
+    #[test]
+    fn non_finite_and_unbounded_values_are_named_with_their_range() {
+        for (text, key) in [
+            ("[initial_state]\nspeed_offset_mps = inf\n", "initial_state.speed_offset_mps"),
+            ("[initial_state]\nattitude_offset_deg = nan\n", "initial_state.attitude_offset_deg"),
+            ("[initial_state]\nposition_offset_m = [0.5, inf, 0.5]\n", "initial_state.position_offset_m[1]"),
+            ("[initial_state]\npitch_deg = nan\n", "initial_state.pitch_deg"),
+            ("[episode]\nmax_steps = 1000000000000\n", "episode.max_steps"),
+            ("[episode]\nattitude_limit_deg = 0.0\n", "episode.attitude_limit_deg"),
+            ("[control]\nsubsteps = 1000000000000\n", "control.substeps"),
+            ("[observation]\nhistory_frames = 1000000000000\n", "observation.history_frames"),
+            ("[reference]\ncommand_duration_s = inf\n", "reference.command_duration_s"),
+            ("[reference]\nloop_duration_s = 1e9\n", "reference.loop_duration_s"),
+            ("[reference]\nyaw_rate_degps = [-1e300, 0.0]\n", "reference.yaw_rate_degps"),
+            ("[randomization]\nlink_mass_scale = [0.9, 1e300]\n", "randomization.link_mass_scale"),
+        ] {
+            let err = TaskConfig::from_toml(text, "x.toml").unwrap_err().to_string();
+            assert!(err.contains(key), "{text}: {err}");
+        }
+        // The paper's stages all pass.
+        for stage in 1..=4 {
+            TaskConfig::stage(stage).unwrap().validate().unwrap();
+        }
     }
 }
