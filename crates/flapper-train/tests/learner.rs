@@ -65,6 +65,9 @@ fn a_resumed_flight_run_equals_the_uninterrupted_one() {
         std::fs::remove_file(parts.join("checkpoints").join(name)).unwrap();
     }
     std::fs::remove_file(parts.join("policy.safetensors")).unwrap();
+    // The checkpoint holds every environment mid-episode (20-step episodes, checkpoints every 16 steps).
+    let saved = checkpoint::load(&parts.join("checkpoints").join("iter_000002.safetensors")).unwrap();
+    assert!(saved.environments.as_ref().is_some_and(|bytes| bytes.len() > 1000));
     let resumed = train(&small_flight_config(6, 5), &parts, Start::Resume);
 
     assert_eq!(resumed.iteration(), 6);
