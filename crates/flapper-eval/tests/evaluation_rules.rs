@@ -68,6 +68,7 @@ fn completion_counts_episodes_that_reach_the_end_and_manoeuvre_figures_follow_th
     assert_eq!(manoeuvre_window_s("loop"), Some((3.0, 6.0)));
     assert_eq!(manoeuvre_window_s("sharp-turn"), Some((3.0, 4.2)));
     assert_eq!(manoeuvre_window_s("cruise"), None);
+    assert_eq!(manoeuvre_window_s("longitudinal"), None, "it ends in its dive: nothing to rejoin after");
     // 2.5 m off during the loop, back within 0.5 m 1.5 s after it ends (at 7.5 s).
     let good = episode(EpisodeEnd::ReferenceEnd, 9.0, |t| if (3.0..7.5).contains(&t) { 2.5 } else { 0.2 });
     // 1.0 m off during the loop, back at once.

@@ -1,45 +1,74 @@
-//! The committed policies still fly: they complete the 30 s cruise reference from the nominal start and
-//! from most randomized starts, close to the path. This guards every later change to the model, the task
-//! or the learner (a change that breaks the learned flight fails here).
+//! The committed policies still fly: stages 1-2 complete the 30 s cruise reference from the nominal
+//! start and from most randomized starts, close to the path; stage 3 flies the turns of `lateral` and
+//! the `loop` from randomized starts. This guards every later change to the model, the task or the
+//! learner (a change that breaks the learned flight fails here).
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use flapper_eval::tracking::{Pilot, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
 use flapper_sim::{RobotModel, Vec3};
+use flapper_task::TaskConfig;
 use flapper_task::reference::named::named;
 use flapper_train::run::load_flight_policy;
 
-fn check_flies(stage: &str) {
+/// The shipped policy of `stage`, its task, and the named `reference` with the policy's lookahead.
+fn shipped(stage: &str, reference: &str) -> (RobotModel, Pilot, TaskConfig, Arc<flapper_task::reference::Reference>) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies").join(stage).join("policy.safetensors");
     let robot = RobotModel::flapper().unwrap();
     let (policy, task) = load_flight_policy(&path).unwrap();
-    let pilot = Pilot::Policy(Arc::new(policy));
     let lookahead_s = task.observation.lookahead_steps as f64 * 0.02;
-    let reference = Arc::new(named("cruise", Vec3::new(0.0, 0.0, 10.0), 0.02, lookahead_s).unwrap());
+    let reference = Arc::new(named(reference, Vec3::new(0.0, 0.0, 10.0), 0.02, lookahead_s).unwrap());
+    (robot, Pilot::Policy(Arc::new(policy)), task, reference)
+}
 
+/// Flies `reference` from `starts` randomized starts (seed 7): at least `min_completed` complete, each
+/// with an RMS error below `max_rms_m`.
+fn check_tracks(stage: &str, reference: &str, starts: usize, min_completed: usize, max_rms_m: f64) -> Vec<EpisodeResult> {
+    let (robot, pilot, task, path) = shipped(stage, reference);
+    let results = evaluate_tracking(&robot, &pilot, &task, path, starts, 7).unwrap();
+    let completed: Vec<_> = results.iter().filter(|r| r.completed()).collect();
+    assert!(
+        completed.len() >= min_completed,
+        "{stage} on {reference}: only {} of {starts} randomized starts completed ({:?})",
+        completed.len(),
+        results.iter().map(|r| r.end).collect::<Vec<_>>()
+    );
+    for r in completed {
+        assert!(r.rms_error_m() < max_rms_m, "{stage} on {reference}: RMS error {:.2} m", r.rms_error_m());
+    }
+    results
+}
+
+fn check_flies_the_cruise(stage: &str) {
+    let (robot, pilot, task, reference) = shipped(stage, "cruise");
     let mut nominal = task.clone();
     nominal.initial_state.position_offset_m = [0.0; 3];
     nominal.initial_state.speed_offset_mps = 0.0;
     nominal.initial_state.attitude_offset_deg = 0.0;
-    let exact = &evaluate_tracking(&robot, &pilot, &nominal, reference.clone(), 1, 1).unwrap()[0];
+    let exact = &evaluate_tracking(&robot, &pilot, &nominal, reference, 1, 1).unwrap()[0];
     assert!(exact.completed(), "{stage}: nominal start ended {:?} after {} steps", exact.end, exact.steps.len());
     assert!(exact.rms_error_m() < 0.3, "{stage}: nominal start RMS error {:.2} m", exact.rms_error_m());
-
-    let results = evaluate_tracking(&robot, &pilot, &task, reference, 10, 7).unwrap();
-    let completed: Vec<_> = results.iter().filter(|r| r.completed()).collect();
-    assert!(completed.len() >= 7, "{stage}: only {} of 10 randomized starts completed", completed.len());
-    for r in completed {
-        assert!(r.rms_error_m() < 0.5, "{stage}: RMS error {:.2} m", r.rms_error_m());
-    }
+    check_tracks(stage, "cruise", 10, 7, 0.5);
 }
 
 #[test]
 fn the_shipped_stage_1_policy_still_flies_the_cruise() {
-    check_flies("stage1");
+    check_flies_the_cruise("stage1");
 }
 
 #[test]
 fn the_shipped_stage_2_policy_still_flies_the_cruise() {
-    check_flies("stage2");
+    check_flies_the_cruise("stage2");
+}
+
+#[test]
+fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
+    check_tracks("stage3", "lateral", 4, 4, 0.5);
+    let results = check_tracks("stage3", "loop", 4, 4, 1.0);
+    // Through the loop and out of it: upside down on the way, back within 1 m of the path after it.
+    for r in &results {
+        assert!(r.went_inverted(), "a loop goes over the top");
+        assert!(r.time_to_rejoin_s(6.0, 1.0).is_some_and(|t| t < 3.0), "rejoined after the loop");
+    }
 }

@@ -75,7 +75,8 @@ pub fn named_pieces(name: &str) -> Option<Vec<Piece>> {
 
 /// When the manoeuvre of a named reference happens: from the start of its first piece that is not
 /// straight and level to the end of its last one (s from the reference's start); `None` for a
-/// reference that is straight and level throughout or an unknown name.
+/// reference that is straight and level throughout, one that ends inside its manoeuvre (no cruise
+/// after it to rejoin, as `longitudinal`'s dive), or an unknown name.
 pub fn manoeuvre_window_s(name: &str) -> Option<(f64, f64)> {
     let pieces = named_pieces(name)?;
     let is_cruise = |p: &Piece| matches!(p, Piece::Command { vertical_speed_mps, yaw_rate_radps, .. } if *vertical_speed_mps == 0.0 && *yaw_rate_radps == 0.0);
@@ -84,6 +85,9 @@ pub fn manoeuvre_window_s(name: &str) -> Option<(f64, f64)> {
     };
     let first = pieces.iter().position(|p| !is_cruise(p))?;
     let last = pieces.iter().rposition(|p| !is_cruise(p))?;
+    if last + 1 == pieces.len() {
+        return None;
+    }
     let start: f64 = pieces[..first].iter().map(duration).sum();
     let end: f64 = pieces[..=last].iter().map(duration).sum();
     Some((start, end))
