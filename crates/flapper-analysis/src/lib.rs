@@ -8,12 +8,15 @@
 //!   exact start), its report, files and plots;
 //! - [`phase`]: phase portraits of the wings in cruise, climb and a left turn, and the paper's claims
 //!   about them checked;
-//! - [`modes`]: flight modes along the longitudinal reference (does the policy glide?).
+//! - [`modes`]: flight modes along the longitudinal reference (does the policy glide?);
+//! - [`robustness`]: success rates under randomized fluid coefficients, constant winds and all of
+//!   Table III, and the level-flight airspeed envelope (paper Fig. 8-9).
 
 pub mod fit;
 pub mod linear_system;
 pub mod modes;
 pub mod phase;
+pub mod robustness;
 pub mod sysid;
 
 /// What can go wrong in an analysis: a flight the policy cannot make, a fit, an output file.

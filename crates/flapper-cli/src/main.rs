@@ -12,6 +12,7 @@ use flapper_sim::RobotModel;
 mod eval;
 mod modes;
 mod phase;
+mod robustness;
 mod sysid;
 mod train;
 
@@ -151,6 +152,33 @@ enum Command {
         #[arg(long, default_value = "run/modes")]
         out: PathBuf,
     },
+    /// Robustness sweeps (paper Fig. 8-9) on one reference: success as each fluid coefficient (and all
+    /// five) is randomized over wider ranges, under constant winds, with all of Table III at once, and
+    /// the level-flight airspeed envelope; robustness_fluid.csv, robustness_wind.csv, robustness.json,
+    /// plots.
+    Robustness {
+        /// Trained policy (a run's policy.safetensors or a checkpoint).
+        #[arg(long, value_name = "FILE")]
+        policy: PathBuf,
+        /// A named reference (see `flapper reference --list`) or a CSV file of time_s,x_m,y_m,z_m.
+        #[arg(long, default_value = "longitudinal")]
+        reference: String,
+        /// Episodes per setting, each from its own randomized start.
+        #[arg(long, default_value_t = 100)]
+        episodes: usize,
+        /// Seed of the starts and of the drawn dynamics.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Which sweeps to run (comma-separated): fluid, wind, table3, envelope.
+        #[arg(long, value_delimiter = ',', default_value = "fluid,wind,table3,envelope")]
+        sweeps: Vec<String>,
+        /// Randomization ranges r of the fluid sweep (comma-separated; coefficients x[1 - r, 1 + r]).
+        #[arg(long, value_delimiter = ',', default_value = "0,0.1,0.2,0.3,0.4,0.5")]
+        ranges: Vec<f64>,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/robustness")]
+        out: PathBuf,
+    },
     /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
     ExportPolicy {
         /// A checkpoint (runs/NAME/checkpoints/iter_NNNNNN.safetensors).
@@ -251,6 +279,10 @@ fn run(cli: Cli) -> Result<()> {
         Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
         Command::Phase { policy, speed_mps, out } => phase::phase_command(&robot, &policy, speed_mps, &out),
         Command::Modes { policy, out } => modes::modes_command(&robot, &policy, &out),
+        Command::Robustness { policy, reference, episodes, seed, sweeps, ranges, out } => robustness::robustness_command(
+            &robot,
+            robustness::RobustnessArgs { policy: &policy, reference: &reference, episodes, seed, sweeps: &sweeps, ranges: &ranges, out: &out },
+        ),
         Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
             sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)
         }

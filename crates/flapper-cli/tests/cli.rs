@@ -249,3 +249,45 @@ fn analysis_commands_reject_bad_input_with_one_line() {
     let last = stderr.trim_end().lines().last().unwrap();
     assert!(last.starts_with("error: the policy did not fly identification record"), "{stderr}");
 }
+
+#[test]
+fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
+    let out = scratch("robustness");
+    let o = out.to_str().unwrap();
+    let policy = shipped_policy("stage3");
+    let args = ["robustness", "--policy", &policy, "--reference", "sharp-turn", "--episodes", "2", "--seed", "5"];
+    let output = flapper(&[&args[..], &["--sweeps", "fluid,wind", "--ranges", "0,0.5", "--out", o]].concat());
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let fluid = std::fs::read_to_string(out.join("robustness_fluid.csv")).unwrap();
+    let mut lines = fluid.lines();
+    assert_eq!(lines.next(), Some("coefficient,range,episodes,successes,success_rate"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 6 * 2, "six series at two ranges");
+    for coefficient in ["blunt", "slender", "angular", "kutta", "magnus", "all"] {
+        assert_eq!(rows.iter().filter(|r| r[0] == coefficient).count(), 2, "{coefficient}");
+    }
+    for row in &rows {
+        let (episodes, successes, rate): (usize, usize, f64) = (row[2].parse().unwrap(), row[3].parse().unwrap(), row[4].parse().unwrap());
+        assert_eq!(episodes, 2);
+        assert!(successes <= episodes && rate == successes as f64 / episodes as f64, "{row:?}");
+    }
+    let wind = std::fs::read_to_string(out.join("robustness_wind.csv")).unwrap();
+    assert!(wind.starts_with("wind_x_mps,wind_y_mps,wind_z_mps,episodes,successes,success_rate\n"), "{wind}");
+    assert_eq!(wind.lines().count(), 1 + 21);
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("robustness.json")).unwrap()).unwrap();
+    assert!(report["table_iii"].is_null() && report["envelope"].is_null(), "only the sweeps asked for");
+    for file in ["robustness_fluid.svg", "robustness_wind.svg"] {
+        assert!(out.join(file).metadata().unwrap().len() > 1000, "{file}");
+    }
+
+    for (bad, needle) in [
+        (&["--sweeps", "fluid,gusts"][..], "gusts"),
+        (&["--ranges", "0,1.5"][..], "1.5"),
+        (&["--ranges", "NaN"][..], "NaN"),
+        (&["--episodes", "0"][..], "--episodes"),
+        (&["--reference", "no-such-manoeuvre"][..], "no-such-manoeuvre"),
+    ] {
+        let base = ["robustness", "--policy", &policy, "--episodes", "1", "--out", o];
+        assert_one_line_error(&flapper(&[&base[..], bad].concat()), needle);
+    }
+}

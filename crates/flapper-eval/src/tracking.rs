@@ -10,6 +10,7 @@ use flapper_sim::{ActuatedJoint, ModelError, N_ACTUATED_JOINTS, RobotModel, Vec3
 use flapper_task::action::ActionMap;
 use flapper_task::reference::Reference;
 use flapper_task::termination::EpisodeEnd;
+use flapper_task::config::RandomizationConfig;
 use flapper_task::{FlightEnv, ReferenceSource, TaskConfig};
 use rayon::prelude::*;
 
@@ -135,7 +136,35 @@ pub fn evaluate_tracking(
     episodes: usize,
     seed: u64,
 ) -> Result<Vec<EpisodeResult>, ModelError> {
-    let config = Arc::new(evaluation_task(task, &reference));
+    fly_episodes(robot, pilot, evaluation_task(task, &reference), reference, episodes, seed)
+}
+
+/// As [`evaluate_tracking`], with the robot's dynamics and the wind drawn per episode from
+/// `randomization` (the robustness sweeps). Episode k draws its dynamics, then its start, from
+/// environment k's random stream, so its start differs from the unrandomized episode k's.
+pub fn evaluate_tracking_randomized(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    task: &TaskConfig,
+    randomization: &RandomizationConfig,
+    reference: Arc<Reference>,
+    episodes: usize,
+    seed: u64,
+) -> Result<Vec<EpisodeResult>, ModelError> {
+    let mut config = evaluation_task(task, &reference);
+    config.randomization = randomization.clone();
+    fly_episodes(robot, pilot, config, reference, episodes, seed)
+}
+
+fn fly_episodes(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    config: TaskConfig,
+    reference: Arc<Reference>,
+    episodes: usize,
+    seed: u64,
+) -> Result<Vec<EpisodeResult>, ModelError> {
+    let config = Arc::new(config);
     (0..episodes)
         .into_par_iter()
         .map(|k| {

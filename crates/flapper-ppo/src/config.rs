@@ -99,11 +99,14 @@ pub struct RunnerConfig {
     /// Save a checkpoint every this many iterations (and at the end). A checkpoint holds the
     /// environments mid-episode, so that resuming continues the uninterrupted run exactly.
     pub checkpoint_every: usize,
+    /// With `--init-from`: start from this action noise (standard deviation of every action) instead of
+    /// the source policy's. A later stage may restart a policy whose noise grew through training.
+    pub init_from_noise_std: Option<f32>,
 }
 
 impl Default for RunnerConfig {
     fn default() -> Self {
-        Self { envs: 256, iterations: 1500, seed: 1, threads: 0, checkpoint_every: 100 }
+        Self { envs: 256, iterations: 1500, seed: 1, threads: 0, checkpoint_every: 100, init_from_noise_std: None }
     }
 }
 
@@ -181,6 +184,11 @@ impl RunnerConfig {
         }
         if self.threads > 1024 {
             return invalid("runner.threads", self.threads.to_string(), "must be at most 1024 (0 = one per core)");
+        }
+        if let Some(std) = self.init_from_noise_std
+            && !(std.is_finite() && std > 0.0 && std <= 10.0)
+        {
+            return invalid("runner.init_from_noise_std", std.to_string(), "must be in (0, 10]");
         }
         if self.envs * ppo.steps_per_env < ppo.minibatches {
             return invalid("ppo.minibatches", ppo.minibatches.to_string(), "more minibatches than samples per rollout");

@@ -148,6 +148,9 @@ impl<E: VecEnv> Trainer<E> {
                         if let Some(optimizer) = loaded.optimizer {
                             ppo.optimizer = optimizer;
                         }
+                        if let Some(std) = runner.init_from_noise_std {
+                            ppo.policy.log_std.iter_mut().for_each(|s| *s = std.ln());
+                        }
                         ppo
                     }
                     None => Ppo::new(ActorCritic::new(o, a, &ppo_config, &mut rng), ppo_config, runner.envs, rng, threads),

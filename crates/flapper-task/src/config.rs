@@ -139,9 +139,15 @@ pub struct RandomizationConfig {
     /// Uniform offset of each link's centre of mass per axis (paper: 0.05 m; see `com_offset_m` docs in README).
     pub link_com_offset_m: f64,
     pub fluid_coefficient_scale: Interval,
+    /// Which of the five fluid coefficients (blunt drag, slender drag, angular drag, Kutta lift, Magnus
+    /// lift) `fluid_coefficient_scale` applies to; the others stay nominal (the robustness sweeps
+    /// randomize one at a time). All five by default.
+    pub fluid_coefficients_randomized: [bool; 5],
     pub added_mass_scale: Interval,
     pub added_inertia_scale: Interval,
-    /// Uniform wind per axis (x, y, z), +- these values.
+    /// A steady wind (x, y, z) that every episode has, before the drawn part (m/s; zero by default).
+    pub steady_wind_mps: [f64; 3],
+    /// Uniform wind per axis (x, y, z), +- these values, on top of `steady_wind_mps`.
     pub wind_mps: [f64; 3],
 }
 
@@ -223,8 +229,10 @@ impl Default for RandomizationConfig {
             link_inertia_scale: [0.9, 1.1],
             link_com_offset_m: 0.005,
             fluid_coefficient_scale: [0.7, 1.3],
+            fluid_coefficients_randomized: [true; 5],
             added_mass_scale: [0.9, 1.1],
             added_inertia_scale: [0.9, 1.1],
+            steady_wind_mps: [0.0; 3],
             wind_mps: [2.0, 2.0, 1.5],
         }
     }
@@ -441,6 +449,9 @@ impl TaskConfig {
         }
         if !g.wind_mps.iter().all(|w| (0.0..=20.0).contains(w)) {
             return invalid("randomization.wind_mps", format!("{:?}", g.wind_mps), "each must be in [0, 20] m/s");
+        }
+        if !g.steady_wind_mps.iter().all(|w| (-20.0..=20.0).contains(w)) {
+            return invalid("randomization.steady_wind_mps", format!("{:?}", g.steady_wind_mps), "each must be in [-20, 20] m/s");
         }
         Ok(())
     }

@@ -56,7 +56,9 @@ pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut im
         drawn.link_com_offset_m.push(offset);
     }
     for geom in LIFTING_SURFACE_GEOMS {
-        let scales: [f64; 5] = std::array::from_fn(|_| draw(rng, config.fluid_coefficient_scale));
+        // All five are drawn whichever are applied, so the random stream does not depend on the choice.
+        let drawn_scales: [f64; 5] = std::array::from_fn(|_| draw(rng, config.fluid_coefficient_scale));
+        let scales: [f64; 5] = std::array::from_fn(|i| if config.fluid_coefficients_randomized[i] { drawn_scales[i] } else { 1.0 });
         let nominal = sim.fluid_coefficients(geom)?.to_array();
         sim.set_fluid_coefficients(geom, FluidCoefficients::from_array(std::array::from_fn(|i| nominal[i] * scales[i])))?;
         let (mass_scale, inertia_scale) = (draw(rng, config.added_mass_scale), draw(rng, config.added_inertia_scale));
@@ -67,7 +69,8 @@ pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut im
         drawn.added_inertia_scale.push(inertia_scale);
     }
     let [wx, wy, wz] = config.wind_mps;
-    drawn.wind_mps = Vec3::new(draw_symmetric(rng, wx), draw_symmetric(rng, wy), draw_symmetric(rng, wz));
+    let [sx, sy, sz] = config.steady_wind_mps;
+    drawn.wind_mps = Vec3::new(sx + draw_symmetric(rng, wx), sy + draw_symmetric(rng, wy), sz + draw_symmetric(rng, wz));
     sim.set_wind(drawn.wind_mps)?;
     Ok(drawn)
 }

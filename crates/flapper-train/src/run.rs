@@ -52,7 +52,7 @@ pub fn flight_trainer(robot: &RobotModel, config: &TrainConfig, dir: &Path, star
 /// Settings for the inverted pendulum: rsl_rl's PPO with smaller networks and fewer environments.
 pub fn pendulum_settings(seed: u64, max_iterations: usize) -> (PpoConfig, RunnerConfig) {
     let ppo = PpoConfig { actor_hidden: vec![64, 64], critic_hidden: vec![64, 64], ..PpoConfig::default() };
-    let runner = RunnerConfig { envs: 64, iterations: max_iterations, seed, threads: 1, checkpoint_every: 1000 };
+    let runner = RunnerConfig { envs: 64, iterations: max_iterations, seed, threads: 1, checkpoint_every: 1000, init_from_noise_std: None };
     (ppo, runner)
 }
 

@@ -145,7 +145,17 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let trainer = flight_trainer(&robot, &small_flight_config(2, 1), &chained, Start::InitFrom(dir.join("policy.safetensors"))).unwrap();
     assert_eq!(trainer.ppo().policy, source.policy);
     assert_eq!(trainer.iteration(), 0);
-    for d in [dir, pendulum_dir, other, chained] {
+    // ... and with `init_from_noise_std`, from that action noise instead of the source's.
+    let renoised = scratch_dir("renoised");
+    let mut config = small_flight_config(2, 1);
+    config.runner.init_from_noise_std = Some(0.25);
+    let trainer = flight_trainer(&robot, &config, &renoised, Start::InitFrom(dir.join("policy.safetensors"))).unwrap();
+    assert!(trainer.ppo().policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() < 1e-6), "{:?}", trainer.ppo().policy.log_std);
+    assert!(source.policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() > 1e-3), "the source's noise differs");
+    assert_eq!(trainer.ppo().policy.actor, source.policy.actor, "the weights are the source's");
+    config.runner.init_from_noise_std = Some(f32::NAN);
+    assert!(config.runner.validate(&config.ppo).unwrap_err().to_string().contains("runner.init_from_noise_std"));
+    for d in [dir, pendulum_dir, other, chained, renoised] {
         std::fs::remove_dir_all(d).ok();
     }
 }

@@ -1,0 +1,110 @@
+//! The robustness sweeps: a setting changes what it says in MuJoCo's model and nothing else, the next
+//! draw restores the nominal model, and the sweep's success accounting matches the evaluation's.
+
+use std::sync::Arc;
+
+use flapper_analysis::robustness::{
+    FluidSeries, RobustnessSettings, Sweep, Tally, default_winds, fluid_randomization, nominal_randomization, robustness,
+    wind_randomization,
+};
+use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
+use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
+use flapper_task::randomization::randomize;
+use flapper_task::reference::named::named;
+use flapper_train::run::load_flight_policy;
+use rand::SeedableRng;
+
+/// Tallies agree (NaN RMS, when nothing completed, agrees with NaN).
+fn assert_same(a: &Tally, b: &Tally, what: &str) {
+    assert_eq!((a.episodes, a.successes, a.success_rate), (b.episodes, b.successes, b.success_rate), "{what}");
+    assert_eq!(a.mean_rms_error_m.to_bits(), b.mean_rms_error_m.to_bits(), "{what}: RMS");
+}
+
+#[test]
+fn a_kutta_lift_setting_changes_only_kutta_lift_in_mujoco_and_the_next_draw_restores_it() {
+    let robot = RobotModel::flapper().unwrap();
+    let mut sim = robot.instantiate().unwrap();
+    let nominal: Vec<[f64; 5]> = LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let mut kutta_scales = Vec::new();
+    for _ in 0..20 {
+        randomize(&mut sim, &fluid_randomization(FluidSeries::Kutta, 0.5), &mut rng).unwrap();
+        for (geom, nominal) in LIFTING_SURFACE_GEOMS.iter().zip(&nominal) {
+            // Read back from MuJoCo's geom_fluid.
+            let drawn = sim.fluid_coefficients(geom).unwrap().to_array();
+            for i in [0, 1, 2, 4] {
+                assert_eq!(drawn[i], nominal[i], "{geom}: coefficient {i} must stay nominal");
+            }
+            let scale = drawn[3] / nominal[3];
+            assert!((0.5..=1.5).contains(&scale), "{geom}: Kutta lift x{scale}, outside [0.5, 1.5]");
+            kutta_scales.push(scale);
+        }
+        assert_eq!(sim.wind(), Vec3::ZERO, "no wind in a fluid setting");
+    }
+    let (low, high) = kutta_scales.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| (l.min(*s), h.max(*s)));
+    assert!(low < 0.8 && high > 1.2, "draws should spread over the range, got [{low}, {high}]");
+
+    randomize(&mut sim, &nominal_randomization(), &mut rng).unwrap();
+    let restored: Vec<[f64; 5]> = LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
+    assert_eq!(restored, nominal, "a nominal draw restores the model");
+
+    randomize(&mut sim, &fluid_randomization(FluidSeries::All, 0.3), &mut rng).unwrap();
+    let all = sim.fluid_coefficients(LIFTING_SURFACE_GEOMS[0]).unwrap().to_array();
+    assert!((0..5).all(|i| all[i] != nominal[0][i] && (all[i] / nominal[0][i] - 1.0).abs() <= 0.3), "{all:?} vs {:?}", nominal[0]);
+
+    randomize(&mut sim, &wind_randomization([-2.0, 1.0, 0.5]), &mut rng).unwrap();
+    assert_eq!(sim.wind(), Vec3::new(-2.0, 1.0, 0.5), "a wind setting is a constant wind");
+    let still = sim.fluid_coefficients(LIFTING_SURFACE_GEOMS[1]).unwrap().to_array();
+    assert_eq!(still, nominal[1]);
+}
+
+#[test]
+fn the_sweep_counts_the_evaluation_s_completed_episodes() {
+    let robot = RobotModel::flapper().unwrap();
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
+    let (policy, task) = load_flight_policy(&path).unwrap();
+    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
+    let pilot = Pilot::Policy(Arc::new(policy));
+    let settings = RobustnessSettings {
+        sweeps: vec![Sweep::Fluid, Sweep::Wind],
+        episodes: 6,
+        seed: 3,
+        ranges: vec![0.0, 0.5],
+        winds: vec![[0.0; 3], [0.0, 0.0, 2.0]],
+    };
+    assert_eq!(settings.settings_count(), 6 * 2 + 2);
+    let calls = std::sync::atomic::AtomicUsize::new(0);
+    let (report, paths) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {
+        calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    })
+    .unwrap();
+    assert_eq!(calls.into_inner(), settings.settings_count(), "one progress call per setting");
+    assert_eq!(report.fluid.len(), 12);
+    assert_eq!(report.wind.len(), 2);
+    assert_eq!(paths.len(), 2);
+
+    // Range 0 with nothing drawn is the plain evaluation: same starts, same outcomes.
+    let plain = Tally::of(&evaluate_tracking(&robot, &pilot, &task, reference.clone(), 6, 3).unwrap());
+    for row in report.fluid.iter().filter(|f| f.range == 0.0) {
+        assert_same(&row.tally, &plain, &format!("{} at r = 0", row.coefficient));
+    }
+    assert_same(&report.wind[0].tally, &plain, "still air");
+    // Each setting's tally is the count of completed episodes of that setting's evaluation.
+    for row in report.fluid.iter().filter(|f| f.range == 0.5) {
+        let series = FluidSeries::ALL.into_iter().find(|s| s.name() == row.coefficient).unwrap();
+        let results =
+            evaluate_tracking_randomized(&robot, &pilot, &task, &fluid_randomization(series, 0.5), reference.clone(), 6, 3).unwrap();
+        let completed = results.iter().filter(|r| r.completed()).count();
+        assert_eq!((row.tally.episodes, row.tally.successes), (6, completed), "{}", row.coefficient);
+        assert_eq!(row.tally.success_rate, completed as f64 / 6.0);
+    }
+    assert!(report.table_iii.is_none() && report.envelope.is_none(), "only the sweeps asked for run");
+}
+
+#[test]
+fn the_default_winds_cover_the_axes_at_1_and_2_m_s_and_table_iii_s_corners() {
+    let winds = default_winds();
+    assert_eq!(winds.len(), 1 + 12 + 8);
+    assert!(winds.contains(&[-2.0, 0.0, 0.0]) && winds.contains(&[0.0, 1.0, 0.0]) && winds.contains(&[0.0, 0.0, -1.0]));
+    assert!(winds.contains(&[2.0, -2.0, 1.5]) && winds.contains(&[-2.0, 2.0, -1.5]));
+}

@@ -1,0 +1,127 @@
+//! `flapper robustness`: the paper's robustness sweeps (Fig. 8-9) on one reference, with a progress
+//! bar; tables on stdout, CSV, JSON and plots in the output folder.
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result, bail};
+use flapper_analysis::robustness::{MAX_RANGE, RobustnessSettings, Sweep, robustness, write_robustness};
+use flapper_eval::tracking::Pilot;
+use flapper_sim::RobotModel;
+use flapper_train::run::load_flight_policy;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::load_reference;
+
+pub struct RobustnessArgs<'a> {
+    pub policy: &'a Path,
+    pub reference: &'a str,
+    pub episodes: usize,
+    pub seed: u64,
+    pub sweeps: &'a [String],
+    pub ranges: &'a [f64],
+    pub out: &'a Path,
+}
+
+pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()> {
+    if args.episodes == 0 || args.episodes > 100_000 {
+        bail!("--episodes must be 1 to 100000, got {}", args.episodes);
+    }
+    let mut sweeps = Vec::new();
+    for name in args.sweeps {
+        let Some(sweep) = Sweep::parse(name) else {
+            let known: Vec<&str> = Sweep::ALL.iter().map(|s| s.name()).collect();
+            bail!("unknown sweep '{name}' in --sweeps (known: {})", known.join(", "));
+        };
+        if !sweeps.contains(&sweep) {
+            sweeps.push(sweep);
+        }
+    }
+    if let Some(bad) = args.ranges.iter().find(|r| !(r.is_finite() && (0.0..=MAX_RANGE).contains(*r))) {
+        bail!("--ranges: each range must be in [0, {MAX_RANGE}] (coefficients drawn from [1 - r, 1 + r] x nominal), got {bad}");
+    }
+    if args.ranges.is_empty() || args.ranges.len() > 100 {
+        bail!("--ranges: give 1 to 100 ranges, got {}", args.ranges.len());
+    }
+    let (policy, task) = load_flight_policy(args.policy)?;
+    let reference = Arc::new(load_reference(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
+    std::fs::create_dir_all(args.out).with_context(|| format!("cannot create output directory '{}'", args.out.display()))?;
+    let settings = RobustnessSettings {
+        sweeps,
+        episodes: args.episodes,
+        seed: args.seed,
+        ranges: args.ranges.to_vec(),
+        winds: flapper_analysis::robustness::default_winds(),
+    };
+    println!(
+        "robustness of {} on {} ({:.1} s): {} settings of {} episodes (seed {}), sweeps {}",
+        args.policy.display(),
+        reference.name(),
+        reference.duration_s(),
+        settings.settings_count(),
+        args.episodes,
+        args.seed,
+        settings.sweeps.iter().map(|s| s.name()).collect::<Vec<_>>().join(", ")
+    );
+    let bar = ProgressBar::new(settings.settings_count() as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} settings  {elapsed_precise} ETA {eta_precise}  {msg}").expect("a valid template"));
+    let interactive = std::io::stderr().is_terminal();
+    if !interactive {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let pilot = Pilot::Policy(Arc::new(policy));
+    let (report, wind_paths) = robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| {
+        bar.set_message(done.to_owned());
+        bar.inc(1);
+        if !interactive {
+            // A log gets one line per setting instead of the bar.
+            eprintln!("{}/{} settings ({:.0} s): {done}", bar.position(), bar.length().unwrap_or(0), bar.elapsed().as_secs_f64());
+        }
+    })?;
+    bar.finish_and_clear();
+
+    if !report.fluid.is_empty() {
+        println!("fluid coefficients, success rate (%) by range r (x[1 - r, 1 + r], the others nominal, no wind):");
+        print!("{:<10}", "");
+        for r in &settings.ranges {
+            print!("{:>8}", format!("r={r}"));
+        }
+        println!();
+        for series in flapper_analysis::robustness::FluidSeries::ALL {
+            print!("{:<10}", series.name());
+            for f in report.fluid.iter().filter(|f| f.coefficient == series.name()) {
+                print!("{:>8.0}", 100.0 * f.tally.success_rate);
+            }
+            println!();
+        }
+        if let Some(name) = report.most_sensitive_coefficient {
+            println!("most sensitive single coefficient (lowest success at the widest range): {name}");
+        }
+    }
+    if !report.wind.is_empty() {
+        println!("constant winds (world frame; the reference starts along +x):");
+        for w in &report.wind {
+            println!(
+                "  {:<26} ({:>4.1}, {:>4.1}, {:>4.1}) m/s  {:>3}/{}  RMS {:.3} m",
+                w.name, w.wind_mps[0], w.wind_mps[1], w.wind_mps[2], w.tally.successes, w.tally.episodes, w.tally.mean_rms_error_m
+            );
+        }
+    }
+    if let Some(t) = &report.table_iii {
+        println!("everything in Table III randomized at once: {}/{} ({:.0}%), RMS {:.3} m", t.successes, t.episodes, 100.0 * t.success_rate, t.mean_rms_error_m);
+    }
+    if let Some(envelope) = &report.envelope {
+        let speeds: Vec<String> = envelope.speeds.iter().map(|(v, t)| format!("{v}: {}/{}", t.successes, t.episodes)).collect();
+        println!("level flight, 15 s at each airspeed (m/s), completed: {}", speeds.join(", "));
+        match (envelope.slowest_sustained_mps, envelope.fastest_sustained_mps) {
+            (Some(lo), Some(hi)) => println!("sustained level airspeeds (>= 90% completed): {lo} to {hi} m/s"),
+            _ => println!("no level airspeed was sustained (>= 90% completed)"),
+        }
+    }
+    println!("took {:.1} s", report.wall_time_s);
+    for path in write_robustness(&report, &wind_paths, &reference, args.out)? {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
