@@ -35,6 +35,12 @@ pub fn train_command(
             None => TrainConfig::from_toml("", "defaults", stage)?,
         }
     };
+    if resume {
+        // A resumed run continues its own environments (clap already refuses --seed with --resume).
+        if let Some(n) = overrides.envs.filter(|n| *n != config.runner.envs) {
+            bail!("--envs {n} with --resume: the run in '{}' has {} environments (a resumed run keeps them; start a new run with --init-from to change it)", out.display(), config.runner.envs);
+        }
+    }
     if let Some(n) = overrides.iterations {
         config.runner.iterations = n;
     }

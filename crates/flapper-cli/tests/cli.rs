@@ -145,6 +145,11 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     // Starting again into the same folder is refused; --resume with more iterations extends it.
     let again = flapper(&["train", "--config", config.to_str().unwrap(), "--out", run.to_str().unwrap()]);
     assert_one_line_error(&again, "already holds a training run");
+    // A resumed run keeps its environment count and seed; asking for others is an error, not a silent change.
+    let csv_before = std::fs::read_to_string(run.join("training.csv")).unwrap();
+    assert_one_line_error(&flapper(&["train", "--resume", "--iterations", "3", "--envs", "6", "--out", run.to_str().unwrap()]), "--envs 6 with --resume");
+    assert_one_line_error(&flapper(&["train", "--resume", "--iterations", "3", "--seed", "99", "--out", run.to_str().unwrap()]), "cannot be used with");
+    assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap(), csv_before, "a refused resume changes nothing");
     let resumed = flapper(&["train", "--resume", "--iterations", "3", "--out", run.to_str().unwrap()]);
     assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
     assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap().lines().count(), 4);

@@ -232,6 +232,12 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     if info.format_version != FORMAT_VERSION {
         return Err(format(format!("format version {} (this build reads {FORMAT_VERSION})", info.format_version)));
     }
+    if info.kind != "policy" && info.kind != "checkpoint" {
+        return Err(format(format!("kind '{}' (expected 'policy' or 'checkpoint')", info.kind)));
+    }
+    if !(info.learning_rate.is_finite() && info.learning_rate > 0.0) {
+        return Err(format(format!("learning rate {} (must be finite and positive)", info.learning_rate)));
+    }
     let read = |name: &str, dtype: Dtype, len: usize| -> Result<Vec<u8>, CheckpointError> {
         let view = tensors.tensor(name).map_err(|_| format(format!("tensor '{name}' missing")))?;
         let count: usize = view.shape().iter().product();
@@ -290,6 +296,37 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     };
     if info.kind == "checkpoint" && info.rng.as_ref().and_then(RngState::restore).is_none() {
         return Err(format("checkpoint without a valid random state".into()));
+    }
+    // Values a trained policy cannot hold: a file with them would fly or train on garbage.
+    fn first_non_finite(values: impl IntoIterator<Item = f64>) -> Option<usize> {
+        values.into_iter().position(|v| !v.is_finite())
+    }
+    let non_finite = |name: &str, found: Option<usize>| match found {
+        Some(i) => Err(format(format!("tensor '{name}' holds a non-finite value (element {i})"))),
+        None => Ok(()),
+    };
+    non_finite("actor", first_non_finite(actor.params().iter().map(|&v| v as f64)))?;
+    non_finite("critic", first_non_finite(critic.params().iter().map(|&v| v as f64)))?;
+    non_finite("actor.log_std", first_non_finite(log_std.iter().map(|&v| v as f64)))?;
+    if let Some(s) = log_std.iter().find(|s| !(-20.0..=5.0).contains(*s)) {
+        return Err(format(format!("tensor 'actor.log_std' holds {s} (an action noise std outside [2e-9, 148])")));
+    }
+    non_finite("normalizer.mean", first_non_finite(normalizer.mean.iter().copied()))?;
+    non_finite("normalizer.variance", first_non_finite(normalizer.variance.iter().copied()))?;
+    if let Some(v) = normalizer.variance.iter().find(|v| **v < 0.0) {
+        return Err(format(format!("tensor 'normalizer.variance' holds a negative variance {v}")));
+    }
+    if !(normalizer.count.is_finite() && normalizer.count >= 0.0) {
+        return Err(format(format!("tensor 'normalizer.count' is {} (must be finite and non-negative)", normalizer.count)));
+    }
+    if let Some(o) = &optimizer {
+        for (name, adam) in [("actor", &o.actor), ("critic", &o.critic), ("log_std", &o.log_std)] {
+            non_finite(&format!("optimizer.{name}.exp_avg"), first_non_finite(adam.first_moment.iter().map(|&v| v as f64)))?;
+            non_finite(&format!("optimizer.{name}.exp_avg_sq"), first_non_finite(adam.second_moment.iter().map(|&v| v as f64)))?;
+            if adam.second_moment.iter().any(|v| *v < 0.0) {
+                return Err(format(format!("tensor 'optimizer.{name}.exp_avg_sq' holds a negative value")));
+            }
+        }
     }
     let environments = match tensors.tensor(ENVIRONMENTS_TENSOR) {
         Ok(view) if view.dtype() == Dtype::U8 => Some(view.data().to_vec()),

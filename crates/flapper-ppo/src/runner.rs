@@ -27,6 +27,8 @@ pub enum TrainError {
     Env(EnvError),
     #[error("'{0}' already holds a training run; pass --resume to continue it or choose another --out")]
     RunExists(PathBuf),
+    #[error("another flapper train is using '{0}' (its lock file .lock is held); wait for it to end or use another --out")]
+    Busy(PathBuf),
     #[error("'{0}' has no checkpoint to resume from (checkpoints/iter_*.safetensors)")]
     NothingToResume(PathBuf),
     #[error("cannot write '{path}': {message}")]
@@ -84,6 +86,24 @@ pub struct Trainer<E: VecEnv> {
     history: Vec<IterationLog>,
     end_reasons: Vec<&'static str>,
     diagnostic_names: Vec<String>,
+    /// Held while the run lives, so that no second trainer writes into the same folder.
+    _run_lock: std::fs::File,
+}
+
+/// Takes the run folder's lock (`dir/.lock`, released by the OS when the process ends).
+fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
+    let path = dir.join(".lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| TrainError::Output { path: path.clone(), message: e.to_string() })?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(TrainError::Busy(dir.to_owned())),
+        Err(std::fs::TryLockError::Error(e)) => Err(TrainError::Output { path, message: e.to_string() }),
+    }
 }
 
 pub fn checkpoint_dir(dir: &Path) -> PathBuf {
@@ -120,6 +140,7 @@ impl<E: VecEnv> Trainer<E> {
         let mut rng = ChaCha8Rng::seed_from_u64(runner.seed);
         let output = |path: &Path, e: &dyn std::fmt::Display| TrainError::Output { path: path.to_owned(), message: e.to_string() };
         let (mut iteration, mut env_steps, mut wall_time_before_s) = (0, 0, 0.0);
+        let run_lock: std::fs::File;
         let ppo = match &start {
             Start::Fresh | Start::InitFrom(_) => {
                 if latest_checkpoint(dir).is_some() || dir.join("training.csv").exists() {
@@ -134,6 +155,10 @@ impl<E: VecEnv> Trainer<E> {
                     _ => None,
                 };
                 std::fs::create_dir_all(checkpoint_dir(dir)).map_err(|e| output(dir, &e))?;
+                run_lock = lock_run(dir)?;
+                if dir.join("training.csv").exists() {
+                    return Err(TrainError::RunExists(dir.to_owned()));
+                }
                 checkpoint::write_atomically(&dir.join("config.toml"), config_toml.as_bytes())?;
                 match loaded {
                     Some(loaded) => {
@@ -158,6 +183,7 @@ impl<E: VecEnv> Trainer<E> {
             }
             Start::Resume => {
                 let path = latest_checkpoint(dir).ok_or_else(|| TrainError::NothingToResume(dir.to_owned()))?;
+                run_lock = lock_run(dir)?;
                 let loaded = checkpoint::load(&path)?;
                 loaded.check_layout(&path, o, a)?;
                 let rng = loaded.rng().expect("load() checked the random state");
@@ -190,6 +216,7 @@ impl<E: VecEnv> Trainer<E> {
             history: Vec::new(),
             end_reasons,
             diagnostic_names,
+            _run_lock: run_lock,
         };
         trainer.prepare_csv(matches!(start, Start::Resume))?;
         Ok(trainer)

@@ -155,6 +155,33 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     assert_eq!(trainer.ppo().policy.actor, source.policy.actor, "the weights are the source's");
     config.runner.init_from_noise_std = Some(f32::NAN);
     assert!(config.runner.validate(&config.ppo).unwrap_err().to_string().contains("runner.init_from_noise_std"));
+    // A second trainer on a live run's folder is refused while the first holds it.
+    let first = flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).unwrap();
+    let err = flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).err().unwrap();
+    assert!(matches!(err, flapper_train::run::RunError::Train(TrainError::Busy(_))), "{err}");
+    drop(first);
+    assert!(flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).is_ok(), "released with its trainer");
+
+    // Values no trained policy holds are refused by name, not flown.
+    let bad_file = renoised.join("bad.safetensors");
+    let mut nan_weight = source.policy.clone();
+    nan_weight.actor.params_mut()[3] = f32::NAN;
+    let mut negative_variance = source.policy.clone();
+    negative_variance.normalizer.variance[7] = -1.0;
+    let mut nan_mean = source.policy.clone();
+    nan_mean.normalizer.mean[0] = f64::NAN;
+    let mut unknown_kind = source.info.clone();
+    unknown_kind.kind = "weights".into();
+    for (info, policy, needle) in [
+        (&source.info, &nan_weight, "'actor' holds a non-finite value"),
+        (&source.info, &negative_variance, "negative variance"),
+        (&source.info, &nan_mean, "'normalizer.mean' holds a non-finite value"),
+        (&unknown_kind, &source.policy, "kind 'weights'"),
+    ] {
+        checkpoint::save(&bad_file, info, policy, None, None).unwrap();
+        let err = checkpoint::load(&bad_file).unwrap_err();
+        assert!(err.to_string().contains(needle) && err.to_string().contains("bad.safetensors"), "{err}");
+    }
     for d in [dir, pendulum_dir, other, chained, renoised] {
         std::fs::remove_dir_all(d).ok();
     }
