@@ -328,8 +328,11 @@ fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg:
 }
 
 fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize, train_iterations: usize) -> Result<()> {
-    if blocks == 0 || steps < 5 {
-        bail!("--blocks must be at least 1 and --steps at least 5 (got {blocks} and {steps})");
+    if blocks == 0 || steps < 5 || blocks > 1000 || steps > 10_000_000 {
+        bail!("--blocks must be 1 to 1000 and --steps 5 to 10000000 (got {blocks} and {steps})");
+    }
+    if envs > 65_536 || threads > 1024 || train_iterations > 100_000 {
+        bail!("--envs must be at most 65536, --threads at most 1024 and --train-iterations at most 100000 (got {envs}, {threads} and {train_iterations})");
     }
     let t = flapper_sim::benchmark::time_steps(robot, blocks, steps)?;
     println!("model {} on one thread, {} blocks of {} steps (flapping at 3.8 m/s):", robot.origin(), t.blocks, t.steps_per_block);

@@ -82,6 +82,8 @@ fn output_path_that_is_a_file_is_one_line() {
 
 #[test]
 fn bench_prints_microseconds_per_step() {
+    assert_one_line_error(&flapper(&["bench", "--threads", "100000"]), "--threads at most 1024");
+    assert_one_line_error(&flapper(&["bench", "--envs", "100000"]), "--envs must be at most 65536");
     let output = flapper(&["bench", "--blocks", "3", "--steps", "500", "--envs", "8", "--train-iterations", "1"]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);

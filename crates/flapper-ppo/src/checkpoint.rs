@@ -258,7 +258,14 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
             .ok_or_else(shape_error)?;
         let mut params = vec![0.0; template.params().len()];
         for t in template.tensors() {
-            params[t.range.clone()].copy_from_slice(&read_f32(&format!("{prefix}.{}", t.name), t.range.len())?);
+            let name = format!("{prefix}.{}", t.name);
+            // The shape, not only the count: a transposed [in, out] weight has the same count.
+            if let Ok(view) = tensors.tensor(&name)
+                && view.shape() != t.shape.as_slice()
+            {
+                return Err(format(format!("tensor '{name}' has shape {:?}, expected {:?}", view.shape(), t.shape)));
+            }
+            params[t.range.clone()].copy_from_slice(&read_f32(&name, t.range.len())?);
         }
         Mlp::with_params(sizes, info.activation, params).ok_or_else(shape_error)
     };

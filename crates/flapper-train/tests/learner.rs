@@ -182,6 +182,16 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
         let err = checkpoint::load(&bad_file).unwrap_err();
         assert!(err.to_string().contains(needle) && err.to_string().contains("bad.safetensors"), "{err}");
     }
+    // A weight stored transposed (same element count, other shape) is refused too.
+    let mut bytes = std::fs::read(dir.join("policy.safetensors")).unwrap();
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header = String::from_utf8(bytes[8..8 + header_len].to_vec()).unwrap();
+    let swapped = header.replacen("\"shape\":[16,540]", "\"shape\":[540,16]", 1);
+    assert_ne!(swapped, header, "the test network's first weight is [16, 540]");
+    bytes[8..8 + header_len].copy_from_slice(swapped.as_bytes());
+    std::fs::write(&bad_file, &bytes).unwrap();
+    let err = checkpoint::load(&bad_file).unwrap_err();
+    assert!(err.to_string().contains("has shape [540, 16], expected [16, 540]"), "{err}");
     for d in [dir, pendulum_dir, other, chained, renoised] {
         std::fs::remove_dir_all(d).ok();
     }
