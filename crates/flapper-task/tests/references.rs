@@ -111,4 +111,9 @@ fn bad_csv_references_are_rejected_naming_the_line() {
     check("t,x,y,z\n0,0,0,0\n0.3,1,0,0\n", &["0.300 s", "lookahead"]);
     check("t,x,y,z\n0,0,0\n", &["line 2", "4 columns"]);
     check("t,x,y,z\n", &["no data rows"]);
+    // No header: the first row would be lost silently if taken for one.
+    check("0,0,0,10\n1,3.8,0,10\n2,7.6,0,10\n", &["line 1", "is data, not a header"]);
+    // A constant far-away coordinate (zero speed) and a reference that would need a billion points.
+    check("t,x,y,z\n0,1e300,0,0\n1,1e300,0,0\n", &["line 2", "beyond"]);
+    check("t,x,y,z\n0,0,0,10\n999999,0,0,10\n", &["covers 999999 s", "at most 3600"]);
 }

@@ -9,6 +9,10 @@ use super::Reference;
 
 /// Faster than any flapping robot could follow: the paper's robot cruises at 3.8-5.3 m/s.
 pub const MAX_REFERENCE_SPEED_MPS: f64 = 15.0;
+/// Largest time or coordinate accepted (s, m): far beyond any flight, small enough for exact sums.
+pub const MAX_REFERENCE_VALUE: f64 = 1e6;
+/// Longest reference accepted (s): one hour at 50 Hz is 180 000 points.
+pub const MAX_REFERENCE_DURATION_S: f64 = 3600.0;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ReferenceFileError {
@@ -32,6 +36,13 @@ pub fn load_reference_csv(path: &Path, dt_s: f64, lookahead_steps: usize) -> Res
 pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
     let at_line = |line: usize, message: String| ReferenceFileError::Line { path: origin.to_owned(), line, message };
     let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(true).trim(csv::Trim::All).from_reader(text.as_bytes());
+    // The first line is the header: one that is all numbers is a data row whose header is missing.
+    if let Ok(header) = reader.headers()
+        && header.len() >= 4
+        && header.iter().take(4).all(|field| field.parse::<f64>().is_ok())
+    {
+        return Err(at_line(1, "is data, not a header: the first line names the columns (time_s,x_m,y_m,z_m)".into()));
+    }
     let mut samples: Vec<(f64, Vec3)> = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| {
@@ -48,6 +59,9 @@ pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps:
             *value = field.parse().map_err(|_| at_line(line, format!("'{field}' is not a number")))?;
             if !value.is_finite() {
                 return Err(at_line(line, format!("'{field}' is not finite")));
+            }
+            if value.abs() > MAX_REFERENCE_VALUE {
+                return Err(at_line(line, format!("'{field}' is beyond +-{MAX_REFERENCE_VALUE} (s or m)")));
             }
         }
         let (time, position) = (values[0], Vec3::new(values[1], values[2], values[3]));
@@ -69,6 +83,9 @@ pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps:
     let (Some(&(t0, _)), Some(&(t1, _))) = (samples.first(), samples.last()) else {
         return Err(whole("no data rows".into()));
     };
+    if t1 - t0 > MAX_REFERENCE_DURATION_S {
+        return Err(whole(format!("covers {:.0} s; at most {MAX_REFERENCE_DURATION_S} s are accepted", t1 - t0)));
+    }
     let needed_s = lookahead_steps as f64 * dt_s;
     if t1 - t0 < needed_s {
         return Err(whole(format!(
