@@ -12,6 +12,8 @@ pub enum ModelError {
     Load { origin: String, message: String },
     #[error("model '{origin}' is not the flapping-wing robot: {problem}")]
     NotTheRobot { origin: String, problem: String },
+    #[error("model '{origin}': {problem}")]
+    Unphysical { origin: String, problem: String },
     #[error("unknown {kind} '{name}' (known: {known})")]
     UnknownName { kind: &'static str, name: String, known: String },
     #[error("invalid value for {what}: {value} ({why})")]

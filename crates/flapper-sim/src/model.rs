@@ -99,6 +99,7 @@ impl RobotModel {
             joint_dof[i] = model.jnt_dofadr()[id] as usize;
             actuator_ids[i] = actuator;
         }
+        check_physical(&model, &origin)?;
         let layout = Layout {
             base_qpos: model.jnt_qposadr()[base] as usize,
             base_dof: model.jnt_dofadr()[base] as usize,
@@ -162,4 +163,49 @@ impl RobotModel {
             actuators: model.ffi().nu as usize,
         }
     }
+}
+
+/// Numbers no simulation of this robot could run on: a timestep outside [1 us, 10 ms] (the control loop
+/// needs several substeps per 20 ms), non-finite or non-positive masses and inertias, non-finite or
+/// negative damping, fluid coefficients, density and viscosity, joint ranges that are not finite and
+/// increasing.
+fn check_physical(model: &MjModel, origin: &str) -> Result<(), ModelError> {
+    let fail = |problem: String| Err(ModelError::Unphysical { origin: origin.to_owned(), problem });
+    let timestep = model.opt().timestep;
+    if !(timestep.is_finite() && (1e-6..=0.01).contains(&timestep)) {
+        return fail(format!("timestep {timestep:e} s is outside [1e-6, 0.01] s"));
+    }
+    for (what, value) in [("density", model.opt().density), ("viscosity", model.opt().viscosity)] {
+        if !(value.is_finite() && (0.0..=1e4).contains(&value)) {
+            return fail(format!("{what} {value:e} is outside [0, 1e4]"));
+        }
+    }
+    for body in BODY_NAMES {
+        let id = model.name_to_id(MjtObjBase::mjOBJ_BODY, body).expect("checked above");
+        let mass = model.body_mass()[id];
+        if !(mass.is_finite() && mass > 0.0 && mass <= 100.0) {
+            return fail(format!("body '{body}' has mass {mass:e} kg (must be in (0, 100] kg)"));
+        }
+        if let Some(i) = model.body_inertia()[id].iter().find(|i| !(i.is_finite() && **i >= 0.0 && **i <= 100.0)) {
+            return fail(format!("body '{body}' has inertia {i:e} kg m^2 (must be in [0, 100])"));
+        }
+    }
+    if let Some(d) = model.dof_damping().iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
+        return fail(format!("a joint has damping {d:e} (must be finite and non-negative)"));
+    }
+    for geom in LIFTING_SURFACE_GEOMS {
+        if let Some(id) = model.name_to_id(MjtObjBase::mjOBJ_GEOM, geom)
+            && let Some(v) = model.geom_fluid()[id].iter().find(|v| !(v.is_finite() && v.abs() <= 1e6))
+        {
+            return fail(format!("geom '{geom}' has fluid parameter {v:e} (must be finite)"));
+        }
+    }
+    for joint in ActuatedJoint::ALL {
+        let id = model.name_to_id(MjtObjBase::mjOBJ_JOINT, joint.name()).expect("checked above");
+        let [low, high] = model.jnt_range()[id];
+        if !(low.is_finite() && high.is_finite() && low < high) {
+            return fail(format!("joint '{}' has range [{low:e}, {high:e}] (must be finite and increasing)", joint.name()));
+        }
+    }
+    Ok(())
 }

@@ -175,6 +175,22 @@ fn joints_follow_their_targets_and_torques_respect_limits() {
 }
 
 #[test]
+fn unphysical_numbers_in_a_model_are_refused_naming_them() {
+    for (from, to, needle) in [
+        ("timestep=\"0.004\"", "timestep=\"0\"", "timestep 0e0 s"),
+        ("timestep=\"0.004\"", "timestep=\"1e300\"", "timestep 1e300 s"),
+        ("density=\"1.225\"", "density=\"1e300\"", "density 1e300"),
+        ("mass=\"0.226\"", "mass=\"1e300\"", "body 'main_body' has mass 1e300 kg"),
+        ("damping=\"0.002\"", "damping=\"nan\"", "damping NaN"),
+    ] {
+        let text = flapper_sim::ROBOT_MJCF.replacen(from, to, 1);
+        assert_ne!(text, flapper_sim::ROBOT_MJCF, "{from} is in the model");
+        let err = RobotModel::from_mjcf(&text, "edited.xml").unwrap_err();
+        assert!(err.to_string().contains(needle) && err.to_string().contains("edited.xml"), "{to}: {err}");
+    }
+}
+
+#[test]
 fn gravity_alone_accelerates_a_robot_in_vacuum_at_g() {
     // Physics invariant: with the air removed, the free base falls at 9.81 m/s^2.
     let robot = RobotModel::from_mjcf(
