@@ -167,8 +167,8 @@ impl RobotModel {
 
 /// Numbers no simulation of this robot could run on: a timestep outside [1 us, 10 ms] (the control loop
 /// needs several substeps per 20 ms), non-finite or non-positive masses and inertias, non-finite or
-/// negative damping, fluid coefficients, density and viscosity, joint ranges that are not finite and
-/// increasing.
+/// negative damping, fluid coefficients, density and viscosity, joint ranges that are not finite or do
+/// not contain zero.
 fn check_physical(model: &MjModel, origin: &str) -> Result<(), ModelError> {
     let fail = |problem: String| Err(ModelError::Unphysical { origin: origin.to_owned(), problem });
     let timestep = model.opt().timestep;
@@ -203,8 +203,9 @@ fn check_physical(model: &MjModel, origin: &str) -> Result<(), ModelError> {
     for joint in ActuatedJoint::ALL {
         let id = model.name_to_id(MjtObjBase::mjOBJ_JOINT, joint.name()).expect("checked above");
         let [low, high] = model.jnt_range()[id];
-        if !(low.is_finite() && high.is_finite() && low < high) {
-            return fail(format!("joint '{}' has range [{low:e}, {high:e}] (must be finite and increasing)", joint.name()));
+        // Actions map to +-min(high, -low) about zero, so the range must contain zero on both sides.
+        if !(low.is_finite() && high.is_finite() && low < 0.0 && high > 0.0) {
+            return fail(format!("joint '{}' has range [{low:e}, {high:e}] (must be finite and contain 0 inside it)", joint.name()));
         }
     }
     Ok(())

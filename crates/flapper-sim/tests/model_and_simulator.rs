@@ -182,6 +182,7 @@ fn unphysical_numbers_in_a_model_are_refused_naming_them() {
         ("density=\"1.225\"", "density=\"1e300\"", "density 1e300"),
         ("mass=\"0.226\"", "mass=\"1e300\"", "body 'main_body' has mass 1e300 kg"),
         ("damping=\"0.002\"", "damping=\"nan\"", "damping NaN"),
+        ("range=\"-60 60\"", "range=\"10 60\"", "must be finite and contain 0"),
     ] {
         let text = flapper_sim::ROBOT_MJCF.replacen(from, to, 1);
         assert_ne!(text, flapper_sim::ROBOT_MJCF, "{from} is in the model");
