@@ -286,7 +286,8 @@ fn level_reference(speed_mps: f64, dt_s: f64, lookahead_s: f64) -> Reference {
 }
 
 /// Runs the sweeps of `settings` with `pilot` on `reference`; `progress` is called after each
-/// setting with its description. Writes nothing (see [`write_robustness`]).
+/// setting with its description. Returns the report and, per wind of `report.wind`, its first
+/// episodes for the path plots. Writes nothing (see [`write_robustness`]).
 pub fn robustness(
     robot: &RobotModel,
     pilot: &Pilot,
@@ -294,7 +295,7 @@ pub fn robustness(
     reference: Arc<Reference>,
     settings: &RobustnessSettings,
     progress: &(dyn Fn(&str) + Sync),
-) -> Result<(RobustnessReport, Vec<(WindResult, Vec<EpisodeResult>)>), AnalysisError> {
+) -> Result<(RobustnessReport, Vec<Vec<EpisodeResult>>), AnalysisError> {
     let began = std::time::Instant::now();
     let (episodes, seed) = (settings.episodes, settings.seed);
     let fly = |randomization: &RandomizationConfig| {
@@ -329,10 +330,9 @@ pub fn robustness(
                     let mut results = fly(&wind_randomization(wind))?;
                     let tally = Tally::of(&results);
                     progress(&format!("wind {}: {}/{}", wind_name(wind), tally.successes, tally.episodes));
-                    let result = WindResult { wind_mps: wind, name: wind_name(wind), tally };
+                    report.wind.push(WindResult { wind_mps: wind, name: wind_name(wind), tally });
                     results.truncate(DRAWN_EPISODES);
-                    report.wind.push(result.clone());
-                    wind_paths.push((result, results));
+                    wind_paths.push(results);
                 }
             }
             Sweep::TableIii => {
@@ -376,7 +376,7 @@ fn most_sensitive(fluid: &[FluidResult]) -> Option<&'static str> {
 /// ran), `robustness_wind.csv` and `robustness_wind.svg` (when the wind sweep ran); returns the paths.
 pub fn write_robustness(
     report: &RobustnessReport,
-    wind_paths: &[(WindResult, Vec<EpisodeResult>)],
+    wind_paths: &[Vec<EpisodeResult>],
     reference: &Reference,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, AnalysisError> {
@@ -413,7 +413,7 @@ pub fn write_robustness(
         write_csv(&path, rows).map_err(|e| fail(&path, &e))?;
         written.push(path);
         let svg = dir.join("robustness_wind.svg");
-        draw_wind_paths(wind_paths, reference, &svg).map_err(|e| fail(&svg, &e))?;
+        draw_wind_paths(&report.wind, wind_paths, reference, &svg).map_err(|e| fail(&svg, &e))?;
         written.push(svg);
     }
     Ok(written)
@@ -452,15 +452,16 @@ fn draw_fluid(report: &RobustnessReport, path: &Path) -> Result<(), String> {
 
 /// Fig. 8: top and side views of the first episodes under each 2 m/s axis wind (and still air), the
 /// reference dashed and the wind drawn as an arrow from the start (1 m per m/s).
-fn draw_wind_paths(wind_paths: &[(WindResult, Vec<EpisodeResult>)], reference: &Reference, path: &Path) -> Result<(), String> {
-    let shown: Vec<&(WindResult, Vec<EpisodeResult>)> = wind_paths
+fn draw_wind_paths(winds: &[WindResult], wind_paths: &[Vec<EpisodeResult>], reference: &Reference, path: &Path) -> Result<(), String> {
+    let shown: Vec<(&WindResult, &Vec<EpisodeResult>)> = winds
         .iter()
+        .zip(wind_paths)
         .filter(|(w, _)| {
             let nonzero = w.wind_mps.iter().filter(|c| **c != 0.0).count();
             nonzero == 0 || (nonzero == 1 && w.wind_mps.iter().any(|c| c.abs() == 2.0))
         })
         .collect();
-    let shown = if shown.is_empty() { wind_paths.iter().take(6).collect() } else { shown };
+    let shown = if shown.is_empty() { winds.iter().zip(wind_paths).take(6).collect() } else { shown };
     let reference_points = reference.points();
     let start = reference_points[0];
     let mut panels = Vec::new();

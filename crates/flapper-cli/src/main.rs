@@ -173,8 +173,9 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "fluid,wind,table3,envelope")]
         sweeps: Vec<String>,
         /// Randomization ranges r of the fluid sweep (comma-separated; coefficients x[1 - r, 1 + r]).
-        #[arg(long, value_delimiter = ',', default_value = "0,0.1,0.2,0.3,0.4,0.5")]
-        ranges: Vec<f64>,
+        /// Default: the paper's 0, 0.1, 0.2, 0.3, 0.4, 0.5.
+        #[arg(long, value_delimiter = ',')]
+        ranges: Option<Vec<f64>>,
         /// Output folder (created if needed).
         #[arg(long, default_value = "run/robustness")]
         out: PathBuf,
@@ -281,7 +282,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Modes { policy, out } => modes::modes_command(&robot, &policy, &out),
         Command::Robustness { policy, reference, episodes, seed, sweeps, ranges, out } => robustness::robustness_command(
             &robot,
-            robustness::RobustnessArgs { policy: &policy, reference: &reference, episodes, seed, sweeps: &sweeps, ranges: &ranges, out: &out },
+            robustness::RobustnessArgs { policy: &policy, reference: &reference, episodes, seed, sweeps: &sweeps, ranges: ranges.as_deref(), out: &out },
         ),
         Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
             sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)

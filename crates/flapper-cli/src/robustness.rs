@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
-use flapper_analysis::robustness::{MAX_RANGE, RobustnessSettings, Sweep, robustness, write_robustness};
+use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, Sweep, robustness, write_robustness};
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
@@ -20,7 +20,8 @@ pub struct RobustnessArgs<'a> {
     pub episodes: usize,
     pub seed: u64,
     pub sweeps: &'a [String],
-    pub ranges: &'a [f64],
+    /// The fluid sweep's ranges; the paper's when not given.
+    pub ranges: Option<&'a [f64]>,
     pub out: &'a Path,
 }
 
@@ -38,11 +39,12 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
             sweeps.push(sweep);
         }
     }
-    if let Some(bad) = args.ranges.iter().find(|r| !(r.is_finite() && (0.0..=MAX_RANGE).contains(*r))) {
+    let ranges = args.ranges.unwrap_or(&PAPER_RANGES);
+    if let Some(bad) = ranges.iter().find(|r| !(r.is_finite() && (0.0..=MAX_RANGE).contains(*r))) {
         bail!("--ranges: each range must be in [0, {MAX_RANGE}] (coefficients drawn from [1 - r, 1 + r] x nominal), got {bad}");
     }
-    if args.ranges.is_empty() || args.ranges.len() > 100 {
-        bail!("--ranges: give 1 to 100 ranges, got {}", args.ranges.len());
+    if ranges.is_empty() || ranges.len() > 100 {
+        bail!("--ranges: give 1 to 100 ranges, got {}", ranges.len());
     }
     let (policy, task) = load_flight_policy(args.policy)?;
     let reference = Arc::new(load_reference(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
@@ -51,7 +53,7 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         sweeps,
         episodes: args.episodes,
         seed: args.seed,
-        ranges: args.ranges.to_vec(),
+        ranges: ranges.to_vec(),
         winds: flapper_analysis::robustness::default_winds(),
     };
     println!(

@@ -305,21 +305,21 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         return Err(format("checkpoint without a valid random state".into()));
     }
     // Values a trained policy cannot hold: a file with them would fly or train on garbage.
-    fn first_non_finite(values: impl IntoIterator<Item = f64>) -> Option<usize> {
-        values.into_iter().position(|v| !v.is_finite())
+    fn first_non_finite<T: Copy + Into<f64>>(values: &[T]) -> Option<usize> {
+        values.iter().position(|&v| !v.into().is_finite())
     }
     let non_finite = |name: &str, found: Option<usize>| match found {
         Some(i) => Err(format(format!("tensor '{name}' holds a non-finite value (element {i})"))),
         None => Ok(()),
     };
-    non_finite("actor", first_non_finite(actor.params().iter().map(|&v| v as f64)))?;
-    non_finite("critic", first_non_finite(critic.params().iter().map(|&v| v as f64)))?;
-    non_finite("actor.log_std", first_non_finite(log_std.iter().map(|&v| v as f64)))?;
+    non_finite("actor", first_non_finite(actor.params()))?;
+    non_finite("critic", first_non_finite(critic.params()))?;
+    non_finite("actor.log_std", first_non_finite(&log_std))?;
     if let Some(s) = log_std.iter().find(|s| !(-20.0..=5.0).contains(*s)) {
         return Err(format(format!("tensor 'actor.log_std' holds {s} (an action noise std outside [2e-9, 148])")));
     }
-    non_finite("normalizer.mean", first_non_finite(normalizer.mean.iter().copied()))?;
-    non_finite("normalizer.variance", first_non_finite(normalizer.variance.iter().copied()))?;
+    non_finite("normalizer.mean", first_non_finite(&normalizer.mean))?;
+    non_finite("normalizer.variance", first_non_finite(&normalizer.variance))?;
     if let Some(v) = normalizer.variance.iter().find(|v| **v < 0.0) {
         return Err(format(format!("tensor 'normalizer.variance' holds a negative variance {v}")));
     }
@@ -328,8 +328,8 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     }
     if let Some(o) = &optimizer {
         for (name, adam) in [("actor", &o.actor), ("critic", &o.critic), ("log_std", &o.log_std)] {
-            non_finite(&format!("optimizer.{name}.exp_avg"), first_non_finite(adam.first_moment.iter().map(|&v| v as f64)))?;
-            non_finite(&format!("optimizer.{name}.exp_avg_sq"), first_non_finite(adam.second_moment.iter().map(|&v| v as f64)))?;
+            non_finite(&format!("optimizer.{name}.exp_avg"), first_non_finite(&adam.first_moment))?;
+            non_finite(&format!("optimizer.{name}.exp_avg_sq"), first_non_finite(&adam.second_moment))?;
             if adam.second_moment.iter().any(|v| *v < 0.0) {
                 return Err(format(format!("tensor 'optimizer.{name}.exp_avg_sq' holds a negative value")));
             }

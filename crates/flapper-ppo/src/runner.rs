@@ -156,6 +156,8 @@ impl<E: VecEnv> Trainer<E> {
                 };
                 std::fs::create_dir_all(checkpoint_dir(dir)).map_err(|e| output(dir, &e))?;
                 run_lock = lock_run(dir)?;
+                // Again under the lock: another trainer may have started here since the check above
+                // (which keeps a refused start from creating the folder and its lock file).
                 if dir.join("training.csv").exists() {
                     return Err(TrainError::RunExists(dir.to_owned()));
                 }
