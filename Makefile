@@ -1,12 +1,14 @@
 # The README's commands. Each fetches MuJoCo (once) and builds what it needs.
 #   make demo    fly the shipped stage-2 policy (and the scripted baseline) on the paper's longitudinal
 #                reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
-#   make test    run the whole test suite (what CI runs)
+#   make test    run the whole test suite (what CI runs): Rust tests, then the Python binding's
+#   make python  build the Python package `flapper` (crates/flapper-py) into the virtual environment
+#                .venv (made with $(PYTHON) if missing); `. .venv/bin/activate` then `import flapper`
 #   make train   train stages 1, 2 and 3 from scratch into runs/stage1..3 (see README, "Learned flight")
 #   make bench   simulator, environment, network and end-to-end training throughput
 #   make evaluate  fly POLICY (default: the stage-3 policy) on every named reference, 100 randomized starts
 #                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
-.PHONY: demo test train bench baseline mujoco evaluate
+.PHONY: demo test train bench baseline mujoco evaluate python python-bench
 
 POLICY ?= policies/stage3/policy.safetensors
 REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
@@ -20,8 +22,21 @@ mujoco:
 demo: mujoco
 	$(FLAPPER) eval --policy policies/stage2/policy.safetensors --reference longitudinal --episodes 100 --seed 1 --out run/demo
 
+PYTHON ?= python3
+VENV = .venv
+
 test: mujoco
 	$(CARGO) test --workspace
+	$(MAKE) python
+	$(VENV)/bin/python -m pytest -q crates/flapper-py/tests
+
+python: mujoco
+	@test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(VENV)/bin/python -m pip install --quiet "./crates/flapper-py[test]"
+
+python-bench: python
+	$(VENV)/bin/python crates/flapper-py/benchmarks/steps_per_second.py
 
 train: mujoco
 	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1

@@ -100,6 +100,7 @@ impl Sweep {
 pub fn nominal_randomization() -> RandomizationConfig {
     RandomizationConfig {
         enabled: true,
+        episode_fraction: 1.0,
         joint_damping_scale: [1.0, 1.0],
         link_mass_scale: [1.0, 1.0],
         link_inertia_scale: [1.0, 1.0],

@@ -382,16 +382,13 @@ fn export_policy(checkpoint: &Path, out: &Path) -> Result<()> {
 /// A named reference (starting at 10 m altitude) or a CSV file, at `dt_s`, with `lookahead_steps` of
 /// straight continuation after its end (what the policy sees ahead at the last step).
 pub fn load_reference(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<flapper_task::reference::Reference> {
-    use flapper_task::reference::named::{named, reference_names};
-    let path = Path::new(reference);
-    if reference.ends_with(".csv") || path.exists() {
-        let lookahead = lookahead_steps.max(flapper_task::TaskConfig::default().observation.lookahead_steps);
-        Ok(flapper_task::reference::csv_file::load_reference_csv(path, dt_s, lookahead)?)
+    // A CSV always covers the default lookahead, so it can be flown by any policy.
+    let lookahead = if reference.ends_with(".csv") || Path::new(reference).exists() {
+        lookahead_steps.max(flapper_task::TaskConfig::default().observation.lookahead_steps)
     } else {
-        named(reference, flapper_sim::Vec3::new(0.0, 0.0, 10.0), dt_s, lookahead_steps as f64 * dt_s).with_context(|| {
-            format!("unknown reference '{reference}' (named: {}; or a .csv file)", reference_names().join(", "))
-        })
-    }
+        lookahead_steps
+    };
+    Ok(flapper_task::reference::resolve(reference, dt_s, lookahead)?)
 }
 
 fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<()> {

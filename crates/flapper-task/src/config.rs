@@ -133,6 +133,9 @@ pub struct InitialStateConfig {
 #[serde(default, deny_unknown_fields)]
 pub struct RandomizationConfig {
     pub enabled: bool,
+    /// The share of episodes that are randomized (when `enabled`); the others fly the nominal
+    /// model in still air. 1 (every episode) by default, as the paper.
+    pub episode_fraction: f64,
     pub joint_damping_scale: Interval,
     pub link_mass_scale: Interval,
     pub link_inertia_scale: Interval,
@@ -224,6 +227,7 @@ impl Default for RandomizationConfig {
     fn default() -> Self {
         Self {
             enabled: false,
+            episode_fraction: 1.0,
             joint_damping_scale: [0.9, 1.1],
             link_mass_scale: [0.9, 1.1],
             link_inertia_scale: [0.9, 1.1],
@@ -443,6 +447,9 @@ impl TaskConfig {
             if interval[0] <= 0.0 {
                 return invalid(key, format!("{interval:?}"), "scales must be positive");
             }
+        }
+        if !(g.episode_fraction >= 0.0 && g.episode_fraction <= 1.0) {
+            return invalid("randomization.episode_fraction", g.episode_fraction.to_string(), "must be in [0, 1]");
         }
         if !(g.link_com_offset_m >= 0.0 && g.link_com_offset_m <= 0.1) {
             return invalid("randomization.link_com_offset_m", g.link_com_offset_m.to_string(), "must be in [0, 0.1] m");

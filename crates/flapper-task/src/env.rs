@@ -31,6 +31,8 @@ pub enum ReferenceSource {
 #[derive(Debug, Clone, Copy)]
 pub struct StepResult {
     pub reward: f64,
+    /// Distance from the reference's current target after the step (m).
+    pub position_error_m: f64,
     pub terms: RewardTerms,
     /// Set when the episode ended at this step.
     pub end: Option<EpisodeEnd>,
@@ -130,6 +132,12 @@ impl FlightEnv {
         self.reset()
     }
 
+    /// Flies `source` from now on, starting a new episode on it.
+    pub fn set_reference_source(&mut self, source: ReferenceSource) -> Result<(), ModelError> {
+        self.source = source;
+        self.reset()
+    }
+
     pub fn observation_layout(&self) -> ObservationLayout {
         self.observation.layout()
     }
@@ -222,7 +230,7 @@ impl FlightEnv {
         }
         self.episode_return += reward;
         self.term_sums.add(&terms);
-        StepResult { reward, terms, end }
+        StepResult { reward, position_error_m: error, terms, end }
     }
 
     /// Truncates the current episode after `steps` steps instead of `episode.max_steps` (at least

@@ -35,6 +35,10 @@ pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut im
     if !config.enabled {
         return Ok(drawn);
     }
+    // Drawn only for a fraction below 1, so the paper's setting keeps its random stream.
+    if config.episode_fraction < 1.0 && !rng.random_bool(config.episode_fraction) {
+        return Ok(drawn);
+    }
     for joint in ActuatedJoint::ALL {
         let scale = draw(rng, config.joint_damping_scale);
         let damping = sim.joint_damping(joint.name())?;

@@ -30,9 +30,11 @@ pub struct FlightVecEnv {
     pool: rayon::ThreadPool,
     observation_size: usize,
     observations: Vec<f32>,
-    /// Observation to bootstrap each episode truncated at the last step from (other rows stale).
+    /// Each episode that ended at the last step: its last observation, to bootstrap a truncated
+    /// episode from (other rows stale).
     final_observations: Vec<f32>,
     rewards: Vec<f32>,
+    position_errors_m: Vec<f32>,
     terminated: Vec<bool>,
     truncated: Vec<bool>,
     terms: Vec<RewardTerms>,
@@ -70,6 +72,7 @@ impl FlightVecEnv {
             observations: vec![0.0; count * observation_size],
             final_observations: vec![0.0; count * observation_size],
             rewards: vec![0.0; count],
+            position_errors_m: vec![0.0; count],
             terminated: vec![false; count],
             truncated: vec![false; count],
             terms: vec![RewardTerms::default(); count],
@@ -114,12 +117,13 @@ impl FlightVecEnv {
                 .par_iter_mut()
                 .zip(actions.par_chunks(ACTION_SIZE))
                 .zip(self.observations.par_chunks_mut(size).zip(self.final_observations.par_chunks_mut(size)))
-                .zip(self.rewards.par_iter_mut())
+                .zip(self.rewards.par_iter_mut().zip(self.position_errors_m.par_iter_mut()))
                 .zip(self.terminated.par_iter_mut().zip(self.truncated.par_iter_mut()))
                 .zip(self.terms.par_iter_mut())
-                .map(|(((((env, action), (out, final_out)), reward), (terminated, truncated)), terms)| {
+                .map(|(((((env, action), (out, final_out)), (reward, error)), (terminated, truncated)), terms)| {
                     let result = env.step(action);
                     *reward = result.reward as f32;
+                    *error = result.position_error_m as f32;
                     *terms = result.terms;
                     *terminated = result.end.is_some_and(EpisodeEnd::is_termination);
                     *truncated = result.end.is_some_and(|e| !e.is_termination());
@@ -128,7 +132,7 @@ impl FlightVecEnv {
                         // The state after a fault is broken: bootstrap from the last sound
                         // observation, the one this step's action was chosen on (still in `out`).
                         final_out.copy_from_slice(out);
-                    } else if *truncated {
+                    } else if result.end.is_some() {
                         env.observe(final_out);
                     }
                     if info.is_some() {
@@ -147,6 +151,14 @@ impl FlightVecEnv {
                 self.finished.push(info);
             }
         }
+        Ok(())
+    }
+
+    /// Starts a new episode in every environment, each continuing its own random stream.
+    pub fn reset_all(&mut self) -> Result<(), ModelError> {
+        self.pool.install(|| self.envs.par_iter_mut().try_for_each(|env| env.reset()))?;
+        self.finished.clear();
+        self.observe_all();
         Ok(())
     }
 
@@ -194,10 +206,10 @@ impl FlightVecEnv {
         Ok(())
     }
 
-    /// For each environment truncated at the last step, the observation to bootstrap the value of
-    /// its cut-off future from: its final observation before the reset, or after a simulation fault
-    /// the last observation before the fault (the broken state is never observed). Rows of other
-    /// environments are stale.
+    /// For each environment whose episode ended at the last step, its final observation before the
+    /// reset (a truncated episode bootstraps the value of its cut-off future from it), or after a
+    /// simulation fault the last observation before the fault (the broken state is never observed).
+    /// Rows of other environments are stale.
     pub fn final_observations(&self) -> &[f32] {
         &self.final_observations
     }
@@ -205,6 +217,24 @@ impl FlightVecEnv {
     /// Observations, `len() * observation_size()` numbers, environment by environment.
     pub fn observations(&self) -> &[f32] {
         &self.observations
+    }
+
+    /// Each environment's distance from its target after the last step (m), before any reset.
+    pub fn position_errors_m(&self) -> &[f32] {
+        &self.position_errors_m
+    }
+
+    /// Environment `index` flies `source` from now on, starting a new episode on it.
+    pub fn set_reference_source(&mut self, index: usize, source: ReferenceSource) -> Result<(), ModelError> {
+        let size = self.observation_size;
+        let env = self.envs.get_mut(index).ok_or_else(|| ModelError::InvalidValue {
+            what: "environment index".into(),
+            value: index.to_string(),
+            why: "no such environment",
+        })?;
+        env.set_reference_source(source)?;
+        env.observe(&mut self.observations[index * size..(index + 1) * size]);
+        Ok(())
     }
 
     pub fn rewards(&self) -> &[f32] {

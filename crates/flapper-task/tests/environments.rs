@@ -173,6 +173,26 @@ fn randomization_draws_within_table_iii_and_reads_back_from_the_model() {
     assert_eq!(plain.control().sim().body_mass("tail").unwrap(), nominal.body_mass("tail").unwrap());
 }
 
+#[test]
+fn an_episode_fraction_leaves_the_other_episodes_nominal_in_still_air() {
+    let robot = robot();
+    let nominal = robot.instantiate().unwrap();
+    let mut config = TaskConfig::stage(4).unwrap();
+    config.randomization.episode_fraction = 0.5;
+    let mut env = FlightEnv::new(&robot, Arc::new(config), ReferenceSource::Procedural, 7, 0).unwrap();
+    let (mut randomized, episodes) = (0, 40);
+    for _ in 0..episodes {
+        let sim = env.control().sim();
+        let still = sim.wind() == Vec3::ZERO;
+        let nominal_mass = sim.body_mass("tail").unwrap() == nominal.body_mass("tail").unwrap();
+        assert_eq!(still, nominal_mass, "an episode is randomized whole or not at all");
+        assert_eq!(still, env.drawn_dynamics().joint_damping_scale.is_empty());
+        randomized += usize::from(!still);
+        env.reset().unwrap();
+    }
+    assert!((10..=30).contains(&randomized), "{randomized} of {episodes} randomized at fraction 0.5");
+}
+
 fn run(seed: u64, threads: usize, stage: i64) -> (Vec<f32>, Vec<f32>, usize) {
     let mut envs = FlightVecEnv::new(&robot(), TaskConfig::stage(stage).unwrap(), ReferenceSource::Procedural, 8, seed, threads).unwrap();
     let mut rewards = Vec::new();

@@ -108,3 +108,32 @@ pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps:
     }
     Ok(Reference::new(origin, dt_s, points))
 }
+
+/// A reference given as positions already sampled every `dt_s` (rows of x, y, z in metres, e.g. a
+/// numpy array from Python), checked as a CSV's rows are; `origin` names it in errors.
+pub fn reference_from_points(points: &[[f64; 3]], origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
+    let whole = |message: String| ReferenceFileError::Whole { path: origin.to_owned(), message };
+    let mut checked: Vec<Vec3> = Vec::with_capacity(points.len());
+    for (row, &[x, y, z]) in points.iter().enumerate() {
+        if let Some(value) = [x, y, z].into_iter().find(|v| !v.is_finite() || v.abs() > MAX_REFERENCE_VALUE) {
+            return Err(whole(format!("row {row}: {value} is not a finite coordinate within +-{MAX_REFERENCE_VALUE} m")));
+        }
+        let position = Vec3::new(x, y, z);
+        if let Some(&previous) = checked.last() {
+            let speed = (position - previous).length() / dt_s;
+            if speed > MAX_REFERENCE_SPEED_MPS {
+                return Err(whole(format!(
+                    "row {row}: speed {speed:.1} m/s since the previous row (rows are {dt_s} s apart); at most {MAX_REFERENCE_SPEED_MPS} m/s"
+                )));
+            }
+        }
+        checked.push(position);
+    }
+    if checked.len() < lookahead_steps + 1 {
+        return Err(whole(format!("has {} rows; at least {} are needed for the {lookahead_steps}-step lookahead", checked.len(), lookahead_steps + 1)));
+    }
+    if (checked.len() - 1) as f64 * dt_s > MAX_REFERENCE_DURATION_S {
+        return Err(whole(format!("covers {:.0} s; at most {MAX_REFERENCE_DURATION_S} s are accepted", (checked.len() - 1) as f64 * dt_s)));
+    }
+    Ok(Reference::new(origin, dt_s, checked))
+}

@@ -10,7 +10,35 @@ pub mod csv_file;
 pub mod generator;
 pub mod named;
 
+use std::path::Path;
+
 use flapper_sim::Vec3;
+
+use csv_file::{ReferenceFileError, load_reference_csv};
+use named::{named, reference_names};
+
+/// Where every named reference starts: 10 m above the ground, heading along +x.
+pub const NAMED_START_M: Vec3 = Vec3::new(0.0, 0.0, 10.0);
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    #[error(transparent)]
+    File(#[from] ReferenceFileError),
+    #[error("unknown reference '{name}' (named: {known}; or a .csv file)")]
+    UnknownName { name: String, known: String },
+}
+
+/// A reference by name (see [`named`]) or CSV file (a path ending in `.csv` or one that exists),
+/// sampled every `dt_s`, with `lookahead_steps` of path beyond its end for the observation.
+pub fn resolve(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceError> {
+    let path = Path::new(reference);
+    if reference.ends_with(".csv") || path.exists() {
+        Ok(load_reference_csv(path, dt_s, lookahead_steps)?)
+    } else {
+        named(reference, NAMED_START_M, dt_s, lookahead_steps as f64 * dt_s)
+            .ok_or_else(|| ReferenceError::UnknownName { name: reference.to_owned(), known: reference_names().join(", ") })
+    }
+}
 
 /// A path sampled every `dt_s` seconds; point k is the target at control step k.
 #[derive(Debug, Clone, PartialEq)]
