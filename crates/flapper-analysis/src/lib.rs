@@ -28,6 +28,8 @@ pub enum AnalysisError {
     RecordFailed { record: usize, seed: u64, end: &'static str, time_s: f64, length_s: f64, amplitude_m: f64 },
     #[error("the policy cannot fly the {what}: it ended '{end}' at {time_s:.1} s")]
     FlightFailed { what: String, end: &'static str, time_s: f64 },
+    #[error("the identification is set up for the paper's 50 Hz control rate (0.02 s); this model and task step every {period_s} s")]
+    ControlRate { period_s: f64 },
     #[error("the least-squares fit failed (too little data, or a constant input)")]
     FitFailed,
     #[error("cannot write '{path}': {message}")]

@@ -10,8 +10,9 @@ use flapper_eval::spectrum::fundamental;
 use flapper_eval::tracking::{Pilot, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
-use flapper_sim::{ActuatedJoint, RobotModel, Vec3};
+use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
+use flapper_task::reference::NAMED_START_M;
 use flapper_task::reference::named::named;
 use serde::Serialize;
 
@@ -52,8 +53,9 @@ pub fn flight_modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskCon
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
     exact.initial_state.attitude_offset_deg = 0.0;
-    let lookahead_s = exact.observation.lookahead_steps as f64 * 0.02;
-    let reference = Arc::new(named("longitudinal", Vec3::new(0.0, 0.0, 10.0), 0.02, lookahead_s).expect("a named reference"));
+    let dt_s = exact.control_period_s(robot.timestep_s());
+    let lookahead_s = exact.observation.lookahead_steps as f64 * dt_s;
+    let reference = Arc::new(named("longitudinal", NAMED_START_M, dt_s, lookahead_s).expect("a named reference"));
     let flight = evaluate_tracking(robot, &Pilot::Policy(policy), &exact, reference, 1, 1)?.remove(0);
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);

@@ -9,8 +9,9 @@ use std::sync::Arc;
 use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
-use flapper_sim::{ActuatedJoint, RobotModel, Vec3};
+use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
+use flapper_task::reference::NAMED_START_M;
 use flapper_task::reference::generator::{Piece, build};
 use serde::Serialize;
 
@@ -37,14 +38,15 @@ pub fn fly_command(
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
     exact.initial_state.attitude_offset_deg = 0.0;
-    let lookahead_s = (exact.observation.lookahead_steps + 2) as f64 * 0.02;
+    let dt_s = exact.control_period_s(robot.timestep_s());
+    let lookahead_s = (exact.observation.lookahead_steps + 2) as f64 * dt_s;
     let piece = Piece::Command {
         forward_speed_mps,
         vertical_speed_mps,
         yaw_rate_radps: yaw_rate_degps.to_radians(),
         duration_s: seconds + lookahead_s,
     };
-    let reference = Arc::new(build("phase", &[piece], Vec3::new(0.0, 0.0, 10.0), 0.0, 0.02));
+    let reference = Arc::new(build("phase", &[piece], NAMED_START_M, 0.0, dt_s));
     Ok(evaluate_tracking(robot, &Pilot::Policy(policy.clone()), &exact, reference, 1, 1)?.remove(0))
 }
 

@@ -150,6 +150,10 @@ pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConf
     exact.initial_state.speed_offset_mps = 0.0;
     exact.initial_state.attitude_offset_deg = 0.0;
     let lookahead = exact.observation.lookahead_steps;
+    let period_s = exact.control_period_s(robot.timestep_s());
+    if (period_s - CONTROL_PERIOD_S).abs() > 1e-12 {
+        return Err(AnalysisError::ControlRate { period_s });
+    }
     let steps = (s.record_s / CONTROL_PERIOD_S).round() as usize;
     let plan: Vec<(usize, DataSet, u64)> = (0..s.identification_records)
         .map(|i| (DataSet::Identification, s.seed * 1000 + i as u64))

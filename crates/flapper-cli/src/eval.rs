@@ -38,7 +38,9 @@ pub fn eval_command(
         pilots.push(("scripted", Pilot::Scripted(ScriptedGaitConfig::default()), TaskConfig::default()));
     }
     let lookahead = pilots[0].2.observation.lookahead_steps;
-    let reference = Arc::new(load_reference(reference, 0.02, lookahead)?);
+    // Every pilot's task steps at the same rate: the control substeps are the paper's for both.
+    let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
+    let reference = Arc::new(load_reference(reference, dt_s, lookahead)?);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
     println!("{}: {:.1} s, {} episodes from randomized starts (seed {seed})", reference.name(), reference.duration_s(), episodes);
     let mut summaries = Vec::new();

@@ -266,7 +266,10 @@ fn run(cli: Cli) -> Result<()> {
     };
     match cli.command {
         Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
-        Command::Reference { reference, list, out } => reference_command(reference.as_deref(), list, &out),
+        Command::Reference { reference, list, out } => {
+            let dt_s = flapper_task::TaskConfig::default().control_period_s(robot.timestep_s());
+            reference_command(reference.as_deref(), list, &out, dt_s)
+        }
         Command::Bench { blocks, steps, envs, threads, train_iterations } => {
             bench_command(&robot, blocks, steps, envs, threads, train_iterations)
         }
@@ -391,7 +394,7 @@ pub fn load_reference(reference: &str, dt_s: f64, lookahead_steps: usize) -> Res
     Ok(flapper_task::reference::resolve(reference, dt_s, lookahead)?)
 }
 
-fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<()> {
+fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64) -> Result<()> {
     use flapper_task::reference::named::NAMED_REFERENCES;
     if list {
         for (name, what) in NAMED_REFERENCES {
@@ -400,7 +403,6 @@ fn reference_command(reference: Option<&str>, list: bool, out: &Path) -> Result<
         return Ok(());
     }
     let Some(reference) = reference else { bail!("give a reference name or CSV file (or --list)") };
-    let dt_s = 0.02;
     let loaded = load_reference(reference, dt_s, 0)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
     let csv_path = out.join("reference.csv");

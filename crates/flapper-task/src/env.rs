@@ -64,6 +64,18 @@ pub struct EnvSnapshot {
     term_sums: RewardTerms,
 }
 
+/// A fixed reference must be sampled at the control period: point k is the target at step k.
+fn check_reference_step(source: &ReferenceSource, period_s: f64) -> Result<(), ModelError> {
+    match source {
+        ReferenceSource::Fixed(reference) if (reference.dt_s() - period_s).abs() > 1e-9 * period_s => Err(ModelError::InvalidValue {
+            what: format!("reference '{}' step", reference.name()),
+            value: format!("{} s", reference.dt_s()),
+            why: "differs from the control period of this model and task: resample it at the control period",
+        }),
+        _ => Ok(()),
+    }
+}
+
 pub struct FlightEnv {
     config: Arc<TaskConfig>,
     control: ControlLoop,
@@ -103,7 +115,8 @@ impl FlightEnv {
         let layout = ObservationLayout::of(&config.observation);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);
-        let placeholder = Arc::new(Reference::new("none", 0.02, vec![Vec3::ZERO]));
+        check_reference_step(&source, control.control_period_s())?;
+        let placeholder = Arc::new(Reference::new("none", control.control_period_s(), vec![Vec3::ZERO]));
         let mut env = Self {
             config,
             control,
@@ -134,6 +147,7 @@ impl FlightEnv {
 
     /// Flies `source` from now on, starting a new episode on it.
     pub fn set_reference_source(&mut self, source: ReferenceSource) -> Result<(), ModelError> {
+        check_reference_step(&source, self.control.control_period_s())?;
         self.source = source;
         self.reset()
     }

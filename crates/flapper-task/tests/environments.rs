@@ -349,3 +349,16 @@ fn first_episodes_end_at_spread_out_times_and_later_ones_run_full_length() {
     assert!(first.iter().all(|&l| (1..=40).contains(&l)));
     assert!(!later_lengths.is_empty() && later_lengths.iter().all(|&l| l == 40), "{later_lengths:?}");
 }
+
+#[test]
+fn a_reference_sampled_at_another_step_than_the_control_period_is_refused() {
+    let robot = robot();
+    let config = Arc::new(TaskConfig::stage(3).unwrap());
+    let period = config.control_period_s(robot.timestep_s());
+    let at = |dt_s: f64| ReferenceSource::Fixed(Arc::new(named("cruise", Vec3::new(0.0, 0.0, 10.0), dt_s, 1.0).unwrap()));
+    let error = FlightEnv::new(&robot, config.clone(), at(period / 2.0), 1, 0).err().expect("half the period is refused");
+    assert!(error.to_string().contains("control period"), "{error}");
+    let mut env = FlightEnv::new(&robot, config.clone(), at(period), 1, 0).unwrap();
+    assert!(env.set_reference_source(at(2.0 * period)).is_err());
+    assert!(env.set_reference_source(at(period)).is_ok());
+}

@@ -117,3 +117,19 @@ fn bad_csv_references_are_rejected_naming_the_line() {
     check("t,x,y,z\n0,1e300,0,0\n1,1e300,0,0\n", &["line 2", "beyond"]);
     check("t,x,y,z\n0,0,0,10\n999999,0,0,10\n", &["covers 999999 s", "at most 3600"]);
 }
+
+#[test]
+fn resolve_finds_names_and_files_and_lists_the_names_when_it_cannot() {
+    use flapper_task::reference::{NAMED_START_M, resolve};
+    let loop_ref = resolve("loop", 0.02, 30).unwrap();
+    assert_eq!(loop_ref.points()[0], NAMED_START_M);
+    assert_eq!(loop_ref.dt_s(), 0.02);
+    let error = resolve("corkscrew", 0.02, 30).unwrap_err().to_string();
+    assert!(error.contains("unknown reference 'corkscrew'") && error.contains("aerobatic"), "{error}");
+    let path = std::env::temp_dir().join(format!("flapper-resolve-{}.csv", std::process::id()));
+    std::fs::write(&path, "time_s,x_m,y_m,z_m\n0,0,0,5\n2,8,0,5\n").unwrap();
+    let from_file = resolve(path.to_str().unwrap(), 0.02, 30).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(from_file.len(), 101);
+    assert!(resolve("/nowhere/path.csv", 0.02, 30).unwrap_err().to_string().contains("/nowhere/path.csv"));
+}
