@@ -211,10 +211,15 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError
     let mut temporary = path.as_os_str().to_owned();
     temporary.push(format!(".tmp-{}", std::process::id()));
     let temporary = PathBuf::from(temporary);
-    let mut file = std::fs::File::create(&temporary).map_err(error)?;
-    file.write_all(bytes).and_then(|()| file.sync_all()).map_err(error)?;
-    drop(file);
-    std::fs::rename(&temporary, path).map_err(error)
+    let written = std::fs::File::create(&temporary).and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()));
+    // On any failure (a full disk) the temporary file goes and `path` keeps what it held.
+    match written.and_then(|()| std::fs::rename(&temporary, path)) {
+        Ok(()) => Ok(()),
+        Err(source) => {
+            let _ = std::fs::remove_file(&temporary);
+            Err(error(source))
+        }
+    }
 }
 
 /// Reads a checkpoint or policy file, checking that every tensor is there with its shape.

@@ -27,6 +27,10 @@ pub enum TrainError {
     Env(EnvError),
     #[error("'{0}' already holds a training run; pass --resume to continue it or choose another --out")]
     RunExists(PathBuf),
+    #[error("'{dir}' already holds {file}, which a new run would overwrite; give --out a new or empty folder (or move the file)")]
+    WouldOverwrite { dir: PathBuf, file: &'static str },
+    #[error("cannot resume: '{path}' {problem}; the checkpoints are intact: restore the file, or move it away to resume with a new log from the checkpoint on")]
+    DamagedLog { path: PathBuf, problem: String },
     #[error("another flapper train is using '{0}' (its lock file .lock is held); wait for it to end or use another --out")]
     Busy(PathBuf),
     #[error("'{0}' has no checkpoint to resume from (checkpoints/iter_*.safetensors)")]
@@ -106,6 +110,10 @@ fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
     }
 }
 
+/// The files a run writes in its folder besides the checkpoints: a new run refuses a
+/// folder that holds any of them, so it never overwrites a user's own file.
+pub const RUN_FILES: [&str; 5] = ["config.toml", "policy.safetensors", "policy.safetensors.json", "learning_curves.svg", "training.csv"];
+
 pub fn checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints")
 }
@@ -145,6 +153,9 @@ impl<E: VecEnv> Trainer<E> {
             Start::Fresh | Start::InitFrom(_) => {
                 if latest_checkpoint(dir).is_some() || dir.join("training.csv").exists() {
                     return Err(TrainError::RunExists(dir.to_owned()));
+                }
+                if let Some(file) = RUN_FILES.into_iter().find(|file| dir.join(file).exists()) {
+                    return Err(TrainError::WouldOverwrite { dir: dir.to_owned(), file });
                 }
                 let loaded = match &start {
                     Start::InitFrom(path) => {
@@ -371,16 +382,22 @@ impl<E: VecEnv> Trainer<E> {
         let path = self.csv_path();
         let header = self.header().join(",");
         let mut text = header.clone() + "\n";
-        if resume
-            && let Ok(existing) = std::fs::read_to_string(&path) {
-                for line in existing.lines().skip(1) {
-                    let iteration: Option<usize> = line.split(',').next().and_then(|v| v.parse().ok());
-                    if iteration.is_some_and(|i| i <= self.iteration) {
-                        text.push_str(line);
-                        text.push('\n');
-                    }
+        if resume && path.exists() {
+            // Read strictly: a damaged log is refused, never silently shortened.
+            let damaged = |problem: String| TrainError::DamagedLog { path: path.clone(), problem };
+            let bytes = std::fs::read(&path).map_err(|e| damaged(format!("cannot be read ({e})")))?;
+            let existing = String::from_utf8(bytes)
+                .map_err(|e| damaged(format!("is not text (invalid UTF-8 at byte {})", e.utf8_error().valid_up_to())))?;
+            for (number, line) in existing.lines().enumerate().skip(1) {
+                let Some(iteration) = line.split(',').next().and_then(|v| v.parse::<usize>().ok()) else {
+                    return Err(damaged(format!("line {} does not start with an iteration number", number + 1)));
+                };
+                if iteration <= self.iteration {
+                    text.push_str(line);
+                    text.push('\n');
                 }
             }
+        }
         checkpoint::write_atomically(&path, text.as_bytes())?;
         Ok(())
     }

@@ -196,3 +196,42 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
         std::fs::remove_dir_all(d).ok();
     }
 }
+
+#[test]
+fn nothing_saved_is_lost_user_files_damaged_logs_and_failed_writes() {
+    let robot = RobotModel::flapper().unwrap();
+    // A folder with the user's own config.toml is not a run: a new run there is refused, the file kept.
+    let users = scratch_dir("users-folder");
+    std::fs::create_dir_all(&users).unwrap();
+    std::fs::write(users.join("config.toml"), "# my notes\n").unwrap();
+    let err = flight_trainer(&robot, &small_flight_config(2, 1), &users, Start::Fresh).err().unwrap();
+    assert!(err.to_string().contains("already holds config.toml") && err.to_string().contains("new or empty folder"), "{err}");
+    assert_eq!(std::fs::read_to_string(users.join("config.toml")).unwrap(), "# my notes\n");
+
+    // A damaged training log stops a resume and stays as it was.
+    let dir = scratch_dir("damaged-log");
+    train(&small_flight_config(2, 1), &dir, Start::Fresh);
+    let log = dir.join("training.csv");
+    let good = std::fs::read(&log).unwrap();
+    let mut invalid_utf8 = good.clone();
+    invalid_utf8[good.len() - 5] = 0xff;
+    let mut bad_line = good.clone();
+    bad_line.extend_from_slice(b"garbage,row\n");
+    for (damaged, needle) in [(invalid_utf8, "invalid UTF-8"), (bad_line, "line 4 does not start with an iteration number")] {
+        std::fs::write(&log, &damaged).unwrap();
+        let err = flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).err().unwrap();
+        assert!(err.to_string().contains(needle) && err.to_string().contains("training.csv"), "{err}");
+        assert_eq!(std::fs::read(&log).unwrap(), damaged, "the log is left as it was");
+    }
+    // Moved away, the run resumes from its checkpoint with a new log.
+    std::fs::remove_file(&log).unwrap();
+    assert!(flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).is_ok());
+
+    // A write that fails leaves the old file and no temporary file behind.
+    let target = dir.join("occupied");
+    std::fs::create_dir_all(target.join("inside")).unwrap();
+    assert!(checkpoint::write_atomically(&target, b"new").is_err());
+    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp-")).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    assert!(target.join("inside").is_dir());
+}
