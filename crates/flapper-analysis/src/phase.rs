@@ -262,7 +262,7 @@ pub fn phase_portraits(
         claims,
     };
     let json = dir.join("phase.json");
-    std::fs::write(&json, serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(&json, serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes()).map_err(|e| fail(&json, &e))?;
     let orbit = |label: &str, t: &JointTrace, k: usize| Curve {
         label: label.to_string(),
         points: t.angle_rad.iter().zip(&t.velocity_radps).map(|(a, v)| (a.to_degrees(), v.to_degrees())).collect(),

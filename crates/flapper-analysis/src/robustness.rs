@@ -384,7 +384,7 @@ pub fn write_robustness(
     let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let mut written = Vec::new();
     let json = dir.join("robustness.json");
-    std::fs::write(&json, serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(&json, serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?.as_bytes()).map_err(|e| fail(&json, &e))?;
     written.push(json);
     if !report.fluid.is_empty() {
         let path = dir.join("robustness_fluid.csv");
@@ -421,11 +421,12 @@ pub fn write_robustness(
 }
 
 fn write_csv<T: Serialize>(path: &Path, rows: impl Iterator<Item = T>) -> Result<(), String> {
-    let mut writer = csv::Writer::from_path(path).map_err(|e| e.to_string())?;
+    let mut writer = csv::Writer::from_writer(Vec::new());
     for row in rows {
         writer.serialize(row).map_err(|e| e.to_string())?;
     }
-    writer.flush().map_err(|e| e.to_string())
+    let bytes = writer.into_inner().map_err(|e| e.to_string())?;
+    flapper_plot::write_atomically(path, &bytes).map_err(|e| e.to_string())
 }
 
 /// Fig. 9: success rate (%) against the randomization range, one curve per series.

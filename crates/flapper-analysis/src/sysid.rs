@@ -309,10 +309,10 @@ pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFun
     let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let json = dir.join("sysid.json");
     let text = serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?;
-    std::fs::write(&json, text).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(&json, text.as_bytes()).map_err(|e| fail(&json, &e))?;
 
     let io = dir.join("sysid_io.csv");
-    let mut writer = csv::Writer::from_path(&io).map_err(|e| fail(&io, &e))?;
+    let mut writer = csv::Writer::from_writer(Vec::new());
     for r in records {
         for k in 0..r.time_s.len() {
             let [x, y, z] = &r.axes;
@@ -329,7 +329,8 @@ pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFun
             writer.serialize(row).map_err(|e| fail(&io, &e))?;
         }
     }
-    writer.flush().map_err(|e| fail(&io, &e))?;
+    let bytes = writer.into_inner().map_err(|e| fail(&io, &e))?;
+    flapper_plot::write_atomically(&io, &bytes).map_err(|e| fail(&io, &e))?;
 
     let pole_zero = dir.join("pole_zero.svg");
     let maps: Vec<PoleZeroMap> = report

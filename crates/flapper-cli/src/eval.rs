@@ -80,7 +80,7 @@ pub fn eval_command(
         csv.push('\n');
     }
     let summary_path = out.join("summary.csv");
-    std::fs::write(&summary_path, csv).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
+    flapper_plot::write_atomically(&summary_path, csv.as_bytes()).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
     println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
     Ok(())
 }

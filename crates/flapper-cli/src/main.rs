@@ -410,7 +410,7 @@ fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64)
     for (k, p) in loaded.points().iter().enumerate() {
         text.push_str(&format!("{:.3},{:.4},{:.4},{:.4}\n", k as f64 * dt_s, p.x, p.y, p.z));
     }
-    std::fs::write(&csv_path, text).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
+    flapper_plot::write_atomically(&csv_path, text.as_bytes()).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
     let plot = out.join("reference.svg");
     flapper_eval::write_path_views(loaded.points(), loaded.name(), &plot)?;
     let speeds: Vec<f64> = (0..loaded.len() - 1).map(|k| loaded.speed(k)).collect();

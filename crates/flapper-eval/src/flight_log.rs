@@ -154,7 +154,7 @@ impl FlightLog {
     /// and torque, then the mechanical power. SI units, angles in radians.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
         let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-        let mut writer = csv::Writer::from_path(path).map_err(|e| error(&e))?;
+        let mut writer = csv::Writer::from_writer(Vec::new());
         writer.write_record(Self::csv_header()).map_err(|e| error(&e))?;
         for row in &self.rows {
             let s = &row.state;
@@ -172,7 +172,8 @@ impl FlightLog {
             record.push(row.mechanical_power_w);
             writer.write_record(record.iter().map(|v| format!("{v:.6}"))).map_err(|e| error(&e))?;
         }
-        writer.flush().map_err(|e| error(&e))
+        let bytes = writer.into_inner().map_err(|e| error(&e))?;
+        flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
     }
 
     fn csv_header() -> Vec<String> {

@@ -163,7 +163,7 @@ impl TrackingSummary {
 /// One row per control step of every episode.
 pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
     let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-    let mut out = csv::Writer::from_path(path).map_err(|e| error(&e))?;
+    let mut out = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = [
         "episode", "time_s", "x_m", "y_m", "z_m", "target_x_m", "target_y_m", "target_z_m", "error_m", "airspeed_mps", "roll_rad",
         "pitch_rad", "yaw_rad",
@@ -194,7 +194,8 @@ pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), Out
             out.write_record(&row).map_err(|e| error(&e))?;
         }
     }
-    out.flush().map_err(|e| error(&e))
+    let bytes = out.into_inner().map_err(|e| error(&e))?;
+    flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
 }
 
 /// Writes `path_3d.svg`, `path.svg` (top and side views), `error.svg` and `joints.svg` for the first

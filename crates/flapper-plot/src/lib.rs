@@ -1,5 +1,11 @@
 //! Line charts as SVG: a figure is a grid of panels, each a set of curves on shared axes. The flight
-//! plots (evaluation) and the learning curves (learner) are both drawn with it.
+//! plots (evaluation) and the learning curves (learner) are both drawn with it. Every figure, and
+//! every other output file flapper writes, goes to disk through [`write_atomically`]: complete or
+//! absent, never half written.
+
+mod output;
+
+pub use output::write_atomically;
 
 use std::path::Path;
 
@@ -33,12 +39,15 @@ pub const COLORS: [RGBColor; 5] =
 /// message for the caller to put next to the path.
 pub fn draw(path: &Path, size: (u32, u32), panels: &[Panel], grid: (usize, usize)) -> Result<(), String> {
     let error = |e: &dyn std::fmt::Display| e.to_string();
-    let root = SVGBackend::new(path, size).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| error(&e))?;
     for (area, panel) in root.split_evenly(grid).iter().zip(panels) {
         draw_panel(area, panel).map_err(|e| error(&e))?;
     }
-    root.present().map_err(|e| error(&e))
+    root.present().map_err(|e| error(&e))?;
+    drop(root);
+    write_atomically(path, svg.as_bytes()).map_err(|e| error(&e))
 }
 
 fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<(), Box<dyn std::error::Error>> {
@@ -111,7 +120,8 @@ pub fn draw_paths_3d(path: &Path, title: &str, reference: &[(f64, f64, f64)], fl
     let half = (0..3).map(|k| hi[k] - lo[k]).fold(0.5, f64::max) / 2.0 * 1.05;
     let centre: Vec<f64> = (0..3).map(|k| 0.5 * (lo[k] + hi[k])).collect();
     let range = |k: usize| centre[k] - half..centre[k] + half;
-    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (900, 800)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| error(&e))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
@@ -133,7 +143,10 @@ pub fn draw_paths_3d(path: &Path, title: &str, reference: &[(f64, f64, f64)], fl
         let style = ShapeStyle { color: COLORS[(k + 1) % COLORS.len()].to_rgba(), filled: false, stroke_width: 2 };
         chart.draw_series(LineSeries::new(points.iter().map(up), style)).map_err(|e| error(&e))?;
     }
-    root.present().map_err(|e| error(&e))
+    drop(chart);
+    root.present().map_err(|e| error(&e))?;
+    drop(root);
+    write_atomically(path, svg.as_bytes()).map_err(|e| error(&e))
 }
 
 /// The poles (crosses) and zeros (circles) of one transfer function in the complex plane.
@@ -147,12 +160,15 @@ pub struct PoleZeroMap {
 /// Draws pole-zero maps side by side (the paper's Fig. 5), the imaginary axis marked, into an SVG file.
 pub fn draw_pole_zero_maps(path: &Path, maps: &[PoleZeroMap]) -> Result<(), String> {
     let error = |e: &dyn std::fmt::Display| e.to_string();
-    let root = SVGBackend::new(path, (420 * maps.len().max(1) as u32, 420)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (420 * maps.len().max(1) as u32, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| error(&e))?;
     for (area, map) in root.split_evenly((1, maps.len().max(1))).iter().zip(maps) {
         draw_pole_zero(area, map).map_err(|e| error(&e))?;
     }
-    root.present().map_err(|e| error(&e))
+    root.present().map_err(|e| error(&e))?;
+    drop(root);
+    write_atomically(path, svg.as_bytes()).map_err(|e| error(&e))
 }
 
 fn draw_pole_zero(area: &DrawingArea<SVGBackend, Shift>, map: &PoleZeroMap) -> Result<(), Box<dyn std::error::Error>> {

@@ -204,22 +204,9 @@ pub fn sidecar_path(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Writes to a temporary file in the same folder, flushes it to disk, then renames it over `path`.
+/// Writes `bytes` to `path` whole or not at all ([`flapper_plot::write_atomically`]).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError> {
-    use std::io::Write;
-    let error = |source| CheckpointError::Write { path: path.to_owned(), source };
-    let mut temporary = path.as_os_str().to_owned();
-    temporary.push(format!(".tmp-{}", std::process::id()));
-    let temporary = PathBuf::from(temporary);
-    let written = std::fs::File::create(&temporary).and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()));
-    // On any failure (a full disk) the temporary file goes and `path` keeps what it held.
-    match written.and_then(|()| std::fs::rename(&temporary, path)) {
-        Ok(()) => Ok(()),
-        Err(source) => {
-            let _ = std::fs::remove_file(&temporary);
-            Err(error(source))
-        }
-    }
+    flapper_plot::write_atomically(path, bytes).map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
 }
 
 /// Reads a checkpoint or policy file, checking that every tensor is there with its shape.
