@@ -41,7 +41,7 @@ pub fn eval_command(
     // Every pilot's task steps at the same rate: the control substeps are the paper's for both.
     let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(load_reference(reference, dt_s, lookahead)?);
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     println!("{}: {:.1} s, {} episodes from randomized starts (seed {seed})", reference.name(), reference.duration_s(), episodes);
     let mut summaries = Vec::new();
     for (name, pilot, task) in &pilots {

@@ -11,6 +11,7 @@ use flapper_sim::RobotModel;
 
 mod eval;
 mod modes;
+mod output_dir;
 mod phase;
 mod robustness;
 mod sysid;
@@ -311,7 +312,7 @@ fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg:
             (Box::new(GlideController { tail_rad: tail_deg.to_radians() }), FlightSpec::cruise_launch(seconds, 7.5), "glide")
         }
     };
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     let log = fly(robot, controller.as_mut(), &spec)?;
     let csv = out.join("flight.csv");
     log.write_csv(&csv)?;
@@ -404,7 +405,7 @@ fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64)
     }
     let Some(reference) = reference else { bail!("give a reference name or CSV file (or --list)") };
     let loaded = load_reference(reference, dt_s, 0)?;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     let csv_path = out.join("reference.csv");
     let mut text = String::from("time_s,x_m,y_m,z_m\n");
     for (k, p) in loaded.points().iter().enumerate() {

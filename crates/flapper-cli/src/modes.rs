@@ -3,14 +3,14 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use flapper_analysis::modes::flight_modes;
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
 
 pub fn modes_command(robot: &RobotModel, policy_path: &Path, out: &Path) -> Result<()> {
     let (policy, task) = load_flight_policy(policy_path)?;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     let (report, written) = flight_modes(robot, Arc::new(policy), &task, out)?;
     println!("flight modes of {} on the longitudinal reference (exact start):", policy_path.display());
     println!("{:<8} {:>9} {:>16} {:>14} {:>12} {:>14}  glides", "segment", "time (s)", "flap ampl. (deg)", "flap fund. (Hz)", "energy (%)", "power (W) net/abs");

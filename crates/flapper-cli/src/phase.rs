@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use flapper_analysis::phase::phase_portraits;
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
@@ -13,7 +13,7 @@ pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out
         anyhow::bail!("--speed-mps must be in [2, 6] m/s, got {speed_mps}");
     }
     let (policy, task) = load_flight_policy(policy_path)?;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     let (report, written) = phase_portraits(robot, Arc::new(policy), &task, speed_mps, out)?;
     println!("phase portraits of {} (right wing; cruise and climb at {} m/s, climb {} m/s):", policy_path.display(), report.forward_speed_mps, report.climb_rate_mps);
     for (flight, orbits) in [("cruise", &report.cruise), ("climb", &report.climb)] {

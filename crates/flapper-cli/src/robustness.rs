@@ -5,7 +5,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, Sweep, robustness, write_robustness};
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
@@ -48,7 +48,7 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
     }
     let (policy, task) = load_flight_policy(args.policy)?;
     let reference = Arc::new(load_reference(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
-    std::fs::create_dir_all(args.out).with_context(|| format!("cannot create output directory '{}'", args.out.display()))?;
+    crate::output_dir::prepare_output_dir(args.out)?;
     let settings = RobustnessSettings {
         sweeps,
         episodes: args.episodes,

@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
@@ -35,7 +35,7 @@ pub fn sysid_command(robot: &RobotModel, policy_path: &Path, seed: u64, amplitud
         bail!("--input-lead-s must be in [0, 0.6] s (the policy's lookahead), got {input_lead_s}");
     }
     let settings = SysidSettings { seed, amplitude_m, input_lead_s, ..SysidSettings::default() };
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
+    crate::output_dir::prepare_output_dir(out)?;
     eprintln!(
         "flying {} identification and {} validation records of {:.0} s (cruise {} m/s, target perturbed by {} m RMS per axis, {}-{} Hz)...",
         settings.identification_records, settings.validation_records, settings.record_s, settings.cruise_speed_mps, amplitude_m,

@@ -298,3 +298,19 @@ fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
         assert_one_line_error(&flapper(&[&base[..], bad].concat()), needle);
     }
 }
+
+#[test]
+fn a_folder_holding_files_flapper_did_not_write_is_refused_as_output() {
+    let out = scratch("users-files");
+    std::fs::write(out.join("summary.csv"), "my own table").unwrap();
+    let o = out.to_str().unwrap();
+    assert_one_line_error(&flapper(&["fly", "--seconds", "1", "--out", o]), "holds files flapper did not write");
+    assert_one_line_error(&flapper(&["reference", "loop", "--out", o]), "new or empty folder");
+    assert_eq!(std::fs::read_to_string(out.join("summary.csv")).unwrap(), "my own table");
+    // A folder flapper made may be written again.
+    let ours = out.join("ours");
+    for _ in 0..2 {
+        assert!(flapper(&["reference", "loop", "--out", ours.to_str().unwrap()]).status.success());
+    }
+    assert!(ours.join(".flapper-output").exists() && ours.join("reference.csv").exists());
+}
