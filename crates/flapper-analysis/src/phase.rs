@@ -191,10 +191,11 @@ pub fn phase_portraits(
             return Err(AnalysisError::FlightFailed { what: format!("{name} at {forward_speed_mps} m/s"), end: flight.end.name(), time_s: at });
         }
     }
-    let turn = fly_command(robot, &policy, task, 3.8, 0.0, TURN_RATE_DEGPS, FLIGHT_S)?;
+    let turn = fly_command(robot, &policy, task, flapper_sim::CRUISE_SPEED_MPS, 0.0, TURN_RATE_DEGPS, FLIGHT_S)?;
     let turn_skipped_because = (!turn.completed()).then(|| {
         format!(
-            "the policy cannot turn: a level left turn at {TURN_RATE_DEGPS} deg/s and 3.8 m/s ended '{}' after {:.1} s",
+            "the policy cannot turn: a level left turn at {TURN_RATE_DEGPS} deg/s and {} m/s ended '{}' after {:.1} s",
+            flapper_sim::CRUISE_SPEED_MPS,
             turn.end.name(),
             turn.steps.last().map_or(0.0, |s| s.time_s)
         )

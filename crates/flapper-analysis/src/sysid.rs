@@ -58,7 +58,7 @@ pub struct SysidSettings {
 impl Default for SysidSettings {
     fn default() -> Self {
         Self {
-            cruise_speed_mps: 3.8,
+            cruise_speed_mps: flapper_sim::CRUISE_SPEED_MPS,
             altitude_m: 10.0,
             amplitude_m: 0.15,
             band_hz: [0.05, 0.8],

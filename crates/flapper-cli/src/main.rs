@@ -354,7 +354,11 @@ fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, t
         println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
     }
     let threads = if threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { threads };
-    let n = flapper_ppo::benchmark::time_actor_critic_update(540, 1536, threads, blocks.clamp(3, 21));
+    // The paper's network update: its observation and its minibatch (256 envs x 24 steps / 4).
+    let observation_size = flapper_task::observation::ObservationLayout::of(&flapper_task::TaskConfig::default().observation).size();
+    let ppo = flapper_ppo::PpoConfig::default();
+    let minibatch = flapper_ppo::RunnerConfig::default().envs * ppo.steps_per_env / ppo.minibatches;
+    let n = flapper_ppo::benchmark::time_actor_critic_update(observation_size, minibatch, threads, blocks.clamp(3, 21));
     println!("actor + critic MLPs (540 -> 256, 128, 64 -> 5 | 1), minibatch {}, {} threads:", n.minibatch, n.threads);
     println!("  forward + backward + Adam  median {:.0} samples/s over {} repeats", n.median_samples_per_s, n.repeats);
     if train_iterations > 0 {

@@ -22,7 +22,7 @@ impl FlightSpec {
             initial: InitialState {
                 position_m: Vec3::new(0.0, 0.0, 10.0),
                 orientation: quat_from_euler(0.0, pitch_deg.to_radians(), 0.0),
-                linear_velocity_mps: Vec3::new(3.8, 0.0, 0.0),
+                linear_velocity_mps: Vec3::new(flapper_sim::CRUISE_SPEED_MPS, 0.0, 0.0),
                 ..InitialState::default()
             },
             control: ControlLoopConfig::default(),

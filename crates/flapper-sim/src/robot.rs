@@ -14,6 +14,9 @@ pub fn default_model_path() -> PathBuf {
 /// Number of actuated joints (n_j in the paper).
 pub const N_ACTUATED_JOINTS: usize = 5;
 
+/// The paper's cruise speed (m/s): its longitudinal references, launches and analyses fly at it.
+pub const CRUISE_SPEED_MPS: f64 = 3.8;
+
 /// The five actuated joints in the paper's order q1..q5. Each has a hinge joint and a position
 /// actuator of the same name in the MJCF.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -198,7 +198,7 @@ impl Default for ReferenceConfig {
     fn default() -> Self {
         Self {
             command_duration_s: 3.0,
-            forward_speed_mps: [3.8, 3.8],
+            forward_speed_mps: [flapper_sim::CRUISE_SPEED_MPS; 2],
             vertical_speed_mps: [0.0, 0.0],
             yaw_rate_degps: [0.0, 0.0],
             loop_probability: 0.0,
@@ -414,7 +414,7 @@ impl TaskConfig {
         ] {
             check_interval(key, interval)?;
         }
-        if !(f.forward_speed_mps[0] > 0.0 && f.forward_speed_mps[1] <= 15.0) {
+        if !(f.forward_speed_mps[0] > 0.0 && f.forward_speed_mps[1] <= crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS) {
             return invalid("reference.forward_speed_mps", format!("{:?}", f.forward_speed_mps), "must lie in (0, 15] m/s");
         }
         if !(0.0..=1.0).contains(&f.loop_probability) {

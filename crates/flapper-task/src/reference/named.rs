@@ -18,7 +18,7 @@ pub const NAMED_REFERENCES: [(&str, &str); 8] = [
     ("aerobatic", "loop, turns and roll-off-the-bottom joined by cruising and recovery (about 26 s)"),
 ];
 
-const CRUISE_MPS: f64 = 3.8;
+const CRUISE_MPS: f64 = flapper_sim::CRUISE_SPEED_MPS;
 
 fn cruise(duration_s: f64, speed: f64) -> Piece {
     Piece::Command { forward_speed_mps: speed, vertical_speed_mps: 0.0, yaw_rate_radps: 0.0, duration_s }
