@@ -23,12 +23,12 @@ impl FlightState {
         let orientation = sim.orientation();
         Self {
             time_s: sim.time_s(),
-            position_m: sim.base_position(),
+            position_m: sim.base_position_m(),
             orientation,
             euler_rad: quat_to_euler(orientation),
-            velocity_mps: sim.linear_velocity(),
+            velocity_mps: sim.linear_velocity_mps(),
             body_rates_radps: sim.body_rates(),
-            airspeed_mps: sim.pitot_airspeed(),
+            airspeed_mps: sim.pitot_airspeed_mps(),
             joint_positions_rad: sim.joint_positions(),
             joint_velocities_radps: sim.joint_velocities(),
         }

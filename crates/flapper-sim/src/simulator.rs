@@ -178,7 +178,7 @@ impl Simulator {
     }
 
     /// Position of the main body's frame in the world (m).
-    pub fn base_position(&self) -> Vec3 {
+    pub fn base_position_m(&self) -> Vec3 {
         let b = self.layout.base_qpos;
         Vec3::from_slice(&self.data.qpos()[b..b + 3])
     }
@@ -191,7 +191,7 @@ impl Simulator {
     }
 
     /// Linear velocity of the main body's frame in the world frame (m/s).
-    pub fn linear_velocity(&self) -> Vec3 {
+    pub fn linear_velocity_mps(&self) -> Vec3 {
         let b = self.layout.base_dof;
         Vec3::from_slice(&self.data.qvel()[b..b + 3])
     }
@@ -239,8 +239,8 @@ impl Simulator {
     }
 
     /// Pitot-tube airspeed: the body-x component of the velocity relative to the wind (m/s).
-    pub fn pitot_airspeed(&self) -> f64 {
-        let air_relative = self.linear_velocity() - self.wind();
+    pub fn pitot_airspeed_mps(&self) -> f64 {
+        let air_relative = self.linear_velocity_mps() - self.wind();
         quat_rotate_inverse(self.orientation(), air_relative).x
     }
 

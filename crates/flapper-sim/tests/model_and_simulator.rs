@@ -124,7 +124,7 @@ fn fluid_coefficient_edits_change_the_flight_at_once() {
         }
         sim.reset(&glide);
         sim.step(250).unwrap();
-        sim.base_position().z
+        sim.base_position_m().z
     };
     // Less Kutta lift, faster sink.
     let (paper, weak) = (altitude_after(3.14), altitude_after(1.0));
@@ -144,16 +144,16 @@ fn reset_sets_the_requested_state_and_readers_report_it() {
     };
     sim.reset(&initial);
     assert_eq!(sim.time_s(), 0.0);
-    assert_eq!(sim.base_position(), initial.position_m);
-    assert_eq!(sim.linear_velocity(), initial.linear_velocity_mps);
+    assert_eq!(sim.base_position_m(), initial.position_m);
+    assert_eq!(sim.linear_velocity_mps(), initial.linear_velocity_mps);
     assert_eq!(sim.body_rates(), initial.body_rates_radps);
     assert_eq!(sim.joint_positions(), initial.joint_positions_rad);
     assert_eq!(sim.joint_targets(), initial.joint_positions_rad, "targets start where the joints are");
     // Flying along world +y while yawed 90 degrees: the pitot sees the full speed.
-    assert!((sim.pitot_airspeed() - 3.8).abs() < 1e-9);
+    assert!((sim.pitot_airspeed_mps() - 3.8).abs() < 1e-9);
     // A tail wind of 1 m/s lowers the airspeed by 1 m/s.
     sim.set_wind(Vec3::new(0.0, 1.0, 0.0)).unwrap();
-    assert!((sim.pitot_airspeed() - 2.8).abs() < 1e-9);
+    assert!((sim.pitot_airspeed_mps() - 2.8).abs() < 1e-9);
 }
 
 #[test]
@@ -201,7 +201,7 @@ fn gravity_alone_accelerates_a_robot_in_vacuum_at_g() {
     .unwrap();
     let mut sim = robot.instantiate().unwrap();
     sim.step(250).unwrap();
-    let vz = sim.linear_velocity().z;
+    let vz = sim.linear_velocity_mps().z;
     assert!((vz + 9.81 * sim.time_s()).abs() < 0.02, "vz {vz} after {} s", sim.time_s());
 }
 

@@ -212,7 +212,7 @@ impl FlightEnv {
         self.step += 1;
         self.previous_action = self.actions.to_action(&targets);
         let sim = self.control.sim();
-        let position = sim.base_position();
+        let position = sim.base_position_m();
         let [roll, pitch, _] = quat_to_euler(sim.orientation());
         let error = (self.reference.target(self.step) - position).length();
         let power = self.control.last_step_work().absolute_j / self.control.control_period_s();
@@ -293,7 +293,7 @@ impl FlightEnv {
     /// Writes the current observation into `out` (length `observation_layout().size()`).
     pub fn observe(&self, out: &mut [f32]) {
         let sim = self.control.sim();
-        self.observation.write(&self.reference, self.step, sim.base_position(), sim.orientation(), out);
+        self.observation.write(&self.reference, self.step, sim.base_position_m(), sim.orientation(), out);
     }
 
     /// The finished episode's summary (call when `step` reported an end, before `reset`).

@@ -73,7 +73,7 @@ pub fn read_frame(sim: &Simulator, previous_action: &[f32; ACTION_SIZE]) -> Fram
     let q = quat_to_wxyz(sim.orientation());
     let rates = sim.body_rates().to_array();
     let joints = sim.joint_positions();
-    let values = q.iter().chain(&rates).chain(&joints).copied().chain([sim.pitot_airspeed()]);
+    let values = q.iter().chain(&rates).chain(&joints).copied().chain([sim.pitot_airspeed_mps()]);
     for (slot, value) in frame.iter_mut().zip(values) {
         *slot = value as f32;
     }
