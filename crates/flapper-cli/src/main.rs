@@ -390,13 +390,7 @@ fn export_policy(checkpoint: &Path, out: &Path) -> Result<()> {
 /// A named reference (starting at 10 m altitude) or a CSV file, at `dt_s`, with `lookahead_steps` of
 /// straight continuation after its end (what the policy sees ahead at the last step).
 pub fn load_reference(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<flapper_task::reference::Reference> {
-    // A CSV always covers the default lookahead, so it can be flown by any policy.
-    let lookahead = if reference.ends_with(".csv") || Path::new(reference).exists() {
-        lookahead_steps.max(flapper_task::TaskConfig::default().observation.lookahead_steps)
-    } else {
-        lookahead_steps
-    };
-    Ok(flapper_task::reference::resolve(reference, dt_s, lookahead)?)
+    Ok(flapper_task::reference::resolve(reference, dt_s, lookahead_steps)?)
 }
 
 fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64) -> Result<()> {

@@ -214,16 +214,20 @@ impl VecEnvCore {
         Ok(out)
     }
 
-    /// Environment `index` flies `reference` (a name, CSV path or [rows, 3] float64 array) from
-    /// now on, starting a new episode on it at once. Returns its first observation.
-    fn set_reference<'py>(&mut self, py: Python<'py>, index: usize, reference: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        if index >= self.envs.len() {
+    /// Environment `index` (every one when None) flies `reference` (a name, CSV path or [rows, 3]
+    /// float64 array, resolved once) from now on, starting a new episode on it at once. Returns the
+    /// observations [N, obs].
+    #[pyo3(signature = (reference, index=None))]
+    fn set_reference<'py>(&mut self, py: Python<'py>, reference: &Bound<'py, PyAny>, index: Option<usize>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        if let Some(index) = index.filter(|&i| i >= self.envs.len()) {
             return Err(PyValueError::new_err(format!("environment {index} does not exist ({} environments)", self.envs.len())));
         }
-        let reference = reference_of(reference, self.dt_s, self.task.observation.lookahead_steps)?;
-        self.envs.set_reference_source(index, ReferenceSource::Fixed(Arc::new(reference))).map_err(value_error)?;
-        let size = self.envs.observation_size();
-        Ok(PyArray1::from_slice(py, &self.envs.observations()[index * size..(index + 1) * size]))
+        let source = ReferenceSource::Fixed(Arc::new(reference_of(reference, self.dt_s, self.task.observation.lookahead_steps)?));
+        let indices = index.map_or(0..self.envs.len(), |i| i..i + 1);
+        for i in indices {
+            self.envs.set_reference_source(i, source.clone()).map_err(value_error)?;
+        }
+        self.observations(py)
     }
 
     /// The reference environment `index` flies now, as [rows, 3] positions (m) at the control rate.

@@ -8,7 +8,6 @@ from gymnasium.vector import AutoresetMode
 
 from ._flapper import VecEnvCore
 
-ACTION_SIZE = 5
 REWARD_TERMS = ("position", "body_rate", "level", "energy")
 
 
@@ -51,7 +50,7 @@ class FlightVectorEnv(gymnasium.vector.VectorEnv):
         )
         self.num_envs = self._core.num_envs
         self.single_observation_space = Box(-np.inf, np.inf, (self._core.observation_size,), np.float32)
-        self.single_action_space = Box(-1.0, 1.0, (ACTION_SIZE,), np.float32)
+        self.single_action_space = Box(-1.0, 1.0, (self._core.action_size,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.render_mode = None
@@ -71,8 +70,8 @@ class FlightVectorEnv(gymnasium.vector.VectorEnv):
         if actions.dtype.kind != "f":
             raise TypeError(f"actions must be floating point (float32), got dtype {actions.dtype}")
         actions = np.ascontiguousarray(actions, dtype=np.float32)
-        if actions.shape != (self.num_envs, ACTION_SIZE):
-            raise ValueError(f"actions must have shape ({self.num_envs}, {ACTION_SIZE}), got {actions.shape}")
+        if actions.shape != self.action_space.shape:
+            raise ValueError(f"actions must have shape {self.action_space.shape}, got {actions.shape}")
         out = self._core.step(actions)
         terminated, truncated = out["terminated"], out["truncated"]
         everyone = np.ones(self.num_envs, dtype=bool)
@@ -103,10 +102,7 @@ class FlightVectorEnv(gymnasium.vector.VectorEnv):
         Returns the observations [N, obs]."""
         if isinstance(reference, np.ndarray):
             reference = np.ascontiguousarray(reference, dtype=np.float64)
-        indices = range(self.num_envs) if env_index is None else [int(env_index)]
-        for index in indices:
-            self._core.set_reference(index, reference)
-        return self._core.observations()
+        return self._core.set_reference(reference, None if env_index is None else int(env_index))
 
     def reference_points(self, env_index=0):
         """The path environment `env_index` flies now: [rows, 3] positions (m) at the control rate."""

@@ -29,11 +29,13 @@ pub enum ReferenceError {
 }
 
 /// A reference by name (see [`named`]) or CSV file (a path ending in `.csv` or one that exists),
-/// sampled every `dt_s`, with `lookahead_steps` of path beyond its end for the observation.
+/// sampled every `dt_s`, with `lookahead_steps` of path beyond its end for the observation. A CSV
+/// must cover at least the default lookahead too, so that any policy can fly it.
 pub fn resolve(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceError> {
     let path = Path::new(reference);
     if reference.ends_with(".csv") || path.exists() {
-        Ok(load_reference_csv(path, dt_s, lookahead_steps)?)
+        let lookahead = lookahead_steps.max(crate::config::ObservationConfig::default().lookahead_steps);
+        Ok(load_reference_csv(path, dt_s, lookahead)?)
     } else {
         named(reference, NAMED_START_M, dt_s, lookahead_steps as f64 * dt_s)
             .ok_or_else(|| ReferenceError::UnknownName { name: reference.to_owned(), known: reference_names().join(", ") })
