@@ -6,9 +6,12 @@
 #                .venv (made with $(PYTHON) if missing); `. .venv/bin/activate` then `import flapper`
 #   make train   train stages 1, 2 and 3 from scratch into runs/stage1..3 (see README, "Learned flight")
 #   make bench   simulator, environment, network and end-to-end training throughput
+#   make report-deps  install (Debian/Ubuntu, needs root or sudo) what rendering, video and the browser check
+#                use: Mesa's EGL software renderer, ffmpeg, chromium
+#   make report  regenerate the paper's figures and tables from the shipped policies: run/report/index.html
 #   make evaluate  fly POLICY (default: the stage-3 policy) on every named reference, 100 randomized starts
 #                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
-.PHONY: demo test train bench baseline mujoco evaluate python python-bench
+.PHONY: demo test train bench baseline mujoco evaluate python python-bench report report-deps
 
 POLICY ?= policies/stage3/policy.safetensors
 REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
@@ -53,3 +56,12 @@ bench: mujoco
 
 baseline: mujoco
 	$(FLAPPER) fly --controller scripted --seconds 15 --out run/baseline
+
+# Debian's names; the renderer needs EGL with Mesa's software rasterizer (no GPU), the video ffmpeg,
+# the browser check chromium. Skipped when everything is already there.
+REPORT_DEBS = libegl1 libegl-mesa0 libgl1-mesa-dri ffmpeg chromium
+SUDO = $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+report-deps:
+	@if dpkg -s $(REPORT_DEBS) >/dev/null 2>&1; then echo "report dependencies present: $(REPORT_DEBS)"; \
+	else $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(REPORT_DEBS); fi

@@ -13,6 +13,7 @@ mod eval;
 mod modes;
 mod output_dir;
 mod phase;
+mod report;
 mod robustness;
 mod sysid;
 mod train;
@@ -181,6 +182,45 @@ enum Command {
         #[arg(long, default_value = "run/robustness")]
         out: PathBuf,
     },
+    /// Regenerate the paper: every experiment behind its figures with the shipped policies (tracking,
+    /// system identification, phase portraits, robustness), rendered snapshots and a flight video, and
+    /// one page comparing our numbers with the paper's: DIR/index.html and DIR/report.md.
+    Report {
+        /// The controller the report shows (default: the final shipped controller).
+        #[arg(long, value_name = "FILE", default_value = flapper_report::FINAL_POLICY)]
+        policy: PathBuf,
+        /// Randomized starts per named reference.
+        #[arg(long, default_value_t = 20)]
+        episodes: usize,
+        /// Episodes per setting of the robustness sweeps (fluid coefficients, winds, Table III).
+        #[arg(long, default_value_t = 10)]
+        robustness_episodes: usize,
+        /// Seed of the randomized starts and the drawn dynamics.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Skip the rendered snapshots and the video (everything else is written).
+        #[arg(long)]
+        no_pictures: bool,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/report")]
+        out: PathBuf,
+    },
+    /// Render one flight with MuJoCo's offscreen renderer: a chase-camera video (MP4, needs ffmpeg)
+    /// and snapshots overlaid along the manoeuvre with the reference drawn (PNG; needs EGL).
+    Render {
+        /// Trained policy (a run's policy.safetensors or a checkpoint).
+        #[arg(long, value_name = "FILE")]
+        policy: PathBuf,
+        /// A named reference (see `flapper reference --list`) or a CSV file of time_s,x_m,y_m,z_m.
+        #[arg(long, default_value = "aerobatic")]
+        reference: String,
+        /// Seed of the randomized start.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output folder (created if needed).
+        #[arg(long, default_value = "run/render")]
+        out: PathBuf,
+    },
     /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
     ExportPolicy {
         /// A checkpoint (runs/NAME/checkpoints/iter_NNNNNN.safetensors).
@@ -291,6 +331,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
             sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)
         }
+        Command::Report { policy, episodes, robustness_episodes, seed, no_pictures, out } => {
+            let settings = flapper_report::ReportSettings { policy, episodes, robustness_episodes, seed, pictures: !no_pictures, ..Default::default() };
+            report::report_command(&robot, &settings, &out)
+        }
+        Command::Render { policy, reference, seed, out } => report::render_command(&robot, &policy, &reference, seed, &out),
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }

@@ -16,7 +16,7 @@ use crate::tracking::EpisodeResult;
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
 
 /// Figures over all episodes of one pilot on one reference.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct TrackingSummary {
     pub episodes: usize,
     pub completed: usize,
@@ -45,7 +45,7 @@ pub struct TrackingSummary {
 
 /// Tracking through a reference's manoeuvre (its window from `manoeuvre_window_s`), over the episodes
 /// that flew through it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ManoeuvreFigures {
     pub start_s: f64,
     pub end_s: f64,

@@ -83,20 +83,18 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
     for curve in &panel.curves {
         let color = curve.color;
         let style = ShapeStyle { color: color.to_rgba(), filled: false, stroke_width: if curve.dashed { 1 } else { 2 } };
-        let label = curve.label.clone();
-        if curve.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(curve.points.iter().copied(), 6, 4, style))?
-                .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(1)));
+        let width = style.stroke_width;
+        let series = if curve.dashed {
+            chart.draw_series(DashedLineSeries::new(curve.points.iter().copied(), 6, 4, style))?
         } else {
-            chart
-                .draw_series(LineSeries::new(curve.points.iter().copied(), style))?
-                .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            chart.draw_series(LineSeries::new(curve.points.iter().copied(), style))?
+        };
+        // A curve without a label stays out of the legend (one entry for several pieces of a kind).
+        if !curve.label.is_empty() {
+            series.label(curve.label.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(width)));
         }
     }
-    if panel.curves.len() > 1 {
+    if panel.curves.iter().filter(|c| !c.label.is_empty()).count() > 1 {
         chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
     }
     Ok(())

@@ -25,6 +25,8 @@ pub(crate) struct Layout {
 #[derive(Debug, Clone)]
 pub struct RobotModel {
     origin: String,
+    /// The MJCF text it was compiled from (the renderer adds its scenery to a copy).
+    mjcf: Arc<str>,
     nominal: Arc<MjModel>,
     layout: Arc<Layout>,
 }
@@ -51,19 +53,19 @@ impl RobotModel {
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         let origin = path.display().to_string();
         // Read it ourselves first: MuJoCo's message for a missing file is less clear than the OS's.
-        std::fs::metadata(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
+        let mjcf = std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
         let model = MjModel::from_xml(path).map_err(|e| ModelError::Load { origin: origin.clone(), message: e.to_string() })?;
-        Self::from_mujoco(model, origin)
+        Self::from_mujoco(model, origin, mjcf.into())
     }
 
     /// Loads MJCF text; `origin` names it in error messages.
     pub fn from_mjcf(mjcf: &str, origin: &str) -> Result<Self, ModelError> {
         let model = MjModel::from_xml_string(mjcf)
             .map_err(|e| ModelError::Load { origin: origin.to_owned(), message: e.to_string() })?;
-        Self::from_mujoco(model, origin.to_owned())
+        Self::from_mujoco(model, origin.to_owned(), mjcf.into())
     }
 
-    fn from_mujoco(model: MjModel, origin: String) -> Result<Self, ModelError> {
+    fn from_mujoco(model: MjModel, origin: String, mjcf: Arc<str>) -> Result<Self, ModelError> {
         let not_robot = |problem: String| ModelError::NotTheRobot { origin: origin.clone(), problem };
         let base = model
             .name_to_id(MjtObjBase::mjOBJ_JOINT, BASE_JOINT)
@@ -108,12 +110,17 @@ impl RobotModel {
             joint_dof,
             actuator_ids,
         };
-        Ok(Self { origin, nominal: Arc::new(model), layout: Arc::new(layout) })
+        Ok(Self { origin, mjcf, nominal: Arc::new(model), layout: Arc::new(layout) })
     }
 
     /// Where the model came from (a path, or a name given with the text).
     pub fn origin(&self) -> &str {
         &self.origin
+    }
+
+    /// The MJCF text the model was compiled from.
+    pub fn mjcf(&self) -> &str {
+        &self.mjcf
     }
 
     /// The underlying MuJoCo model (read-only; every simulator edits its own copy).

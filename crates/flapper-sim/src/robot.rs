@@ -61,4 +61,4 @@ pub const BODY_NAMES: [&str; 4] = ["main_body", "wing_left", "wing_right", "tail
 pub const LIFTING_SURFACE_GEOMS: [&str; 3] = ["wing_left", "wing_right", "tail"];
 
 /// The free joint of the main body.
-pub(crate) const BASE_JOINT: &str = "base";
+pub const BASE_JOINT: &str = "base";

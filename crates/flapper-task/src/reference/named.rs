@@ -73,6 +73,42 @@ pub fn named_pieces(name: &str) -> Option<Vec<Piece>> {
     Some(pieces)
 }
 
+/// The pieces of a named reference as labelled spans of time (s from its start): `cruise`, `climb`,
+/// `descent`, `turn left`, `turn right`, `loop`, `immelmann`, `roll-off-the-bottom`. For drawing a
+/// path coloured by manoeuvre; `None` for an unknown name.
+pub fn piece_spans(name: &str) -> Option<Vec<(&'static str, f64, f64)>> {
+    let mut start = 0.0;
+    let spans = named_pieces(name)?
+        .iter()
+        .map(|piece| {
+            let (label, duration) = match *piece {
+                Piece::Command { vertical_speed_mps, yaw_rate_radps, duration_s, .. } => {
+                    let label = if yaw_rate_radps > 0.0 {
+                        "turn left"
+                    } else if yaw_rate_radps < 0.0 {
+                        "turn right"
+                    } else if vertical_speed_mps > 0.0 {
+                        "climb"
+                    } else if vertical_speed_mps < 0.0 {
+                        "descent"
+                    } else {
+                        "cruise"
+                    };
+                    (label, duration_s)
+                }
+                Piece::Loop { kind, duration_s, .. } => match kind {
+                    LoopKind::BackFlip => ("loop", duration_s),
+                    LoopKind::Immelmann => ("immelmann", duration_s),
+                    LoopKind::RollOffTheBottom => ("roll-off-the-bottom", duration_s),
+                },
+            };
+            start += duration;
+            (label, start - duration, start)
+        })
+        .collect();
+    Some(spans)
+}
+
 /// When the manoeuvre of a named reference happens: from the start of its first piece that is not
 /// straight and level to the end of its last one (s from the reference's start); `None` for a
 /// reference that is straight and level throughout, one that ends inside its manoeuvre (no cruise
@@ -111,4 +147,24 @@ pub fn named(name: &str, start: Vec3, dt_s: f64, extra_s: f64) -> Option<Referen
 /// The names, for help texts and error messages.
 pub fn reference_names() -> Vec<&'static str> {
     NAMED_REFERENCES.iter().map(|(name, _)| *name).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn piece_spans_tile_the_reference_in_order() {
+        let spans = piece_spans("aerobatic").unwrap();
+        let labels: Vec<&str> = spans.iter().map(|s| s.0).collect();
+        assert_eq!(labels, ["cruise", "loop", "cruise", "turn left", "cruise", "turn right", "cruise", "roll-off-the-bottom", "cruise"]);
+        assert_eq!(spans[0].1, 0.0);
+        for pair in spans.windows(2) {
+            assert_eq!(pair[0].2, pair[1].1);
+        }
+        let reference = named("aerobatic", Vec3::ZERO, 0.02, 0.0).unwrap();
+        assert!((spans.last().unwrap().2 - reference.duration_s()).abs() < 0.02);
+        assert_eq!(piece_spans("longitudinal").unwrap().iter().map(|s| s.0).collect::<Vec<_>>(), ["cruise", "climb", "descent", "descent"]);
+        assert!(piece_spans("no-such-reference").is_none());
+    }
 }

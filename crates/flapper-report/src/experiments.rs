@@ -1,0 +1,107 @@
+//! The experiments behind the figures, each writing the same files as its own command (`flapper eval`,
+//! `sysid`, `phase`, `modes`, `robustness`) into a folder of the report.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use flapper_analysis::robustness::{PAPER_RANGES, RobustnessSettings, Sweep, default_winds, robustness as run_sweeps, write_robustness};
+use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::tracking_report::{TrackingSummary, write_tracking_plots};
+use flapper_ppo::ActorCritic;
+use flapper_sim::RobotModel;
+use flapper_task::TaskConfig;
+use flapper_task::reference::Reference;
+
+use crate::{ReportError, ReportSettings, write_file};
+
+/// The named references flown for the tracking figures (Fig. 3, 8, 10, 11) and the comparison.
+pub const TRACKED_REFERENCES: [&str; 8] =
+    ["cruise", "longitudinal", "lateral", "sharp-turn", "loop", "roll-off-the-bottom", "immelmann", "aerobatic"];
+
+/// One reference flown from randomized starts.
+pub struct Tracked {
+    pub name: String,
+    pub reference: Arc<Reference>,
+    pub results: Vec<EpisodeResult>,
+    pub period_s: f64,
+}
+
+fn create(dir: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })
+}
+
+/// `flapper eval` without the baseline: `summary.json` (the table's figures), plots of 3 episodes.
+pub fn tracking(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, settings: &ReportSettings, dir: &Path) -> Result<Tracked, ReportError> {
+    let period_s = task.control_period_s(robot.timestep_s());
+    let reference = Arc::new(
+        flapper_task::reference::resolve(name, period_s, task.observation.lookahead_steps).map_err(|e| ReportError::step(format!("reference {name}"), e))?,
+    );
+    let results = evaluate_tracking(robot, pilot, task, reference.clone(), settings.episodes, settings.seed)
+        .map_err(|e| ReportError::step(format!("tracking on {name}"), e))?;
+    let summary = TrackingSummary::of(&results, period_s, flapper_task::reference::named::manoeuvre_window_s(name));
+    create(dir)?;
+    let json = serde_json::json!({
+        "reference": name,
+        "duration_s": reference.duration_s(),
+        "episodes": settings.episodes,
+        "seed": settings.seed,
+        "policy": settings.policy.display().to_string(),
+        "summary": summary,
+    });
+    write_file(&dir.join("summary.json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
+    write_tracking_plots(&results, &format!("policy on {name}"), dir, 3).map_err(|e| ReportError::step(format!("plots of {name}"), e))?;
+    Ok(Tracked { name: name.to_owned(), reference, results, period_s })
+}
+
+/// `flapper sysid` with its defaults.
+pub fn sysid(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(), ReportError> {
+    use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
+    let settings = SysidSettings::default();
+    let fail = |e: flapper_analysis::AnalysisError| ReportError::step("system identification", e);
+    let records = fly_records(robot, policy, task, &settings).map_err(fail)?;
+    let (report, models) = identify(&records, &settings).map_err(fail)?;
+    create(dir)?;
+    write_sysid_files(dir, &report, &models, &records).map_err(fail)?;
+    Ok(())
+}
+
+/// `flapper phase` at the cruise speed of the paper's Fig. 3 (3.8 m/s; the paper's phase portraits
+/// say 3 m/s, where our stage-3 policy flaps irregularly: README, "Closed-loop analysis").
+pub fn phase(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(), ReportError> {
+    create(dir)?;
+    flapper_analysis::phase::phase_portraits(robot, policy, task, flapper_sim::CRUISE_SPEED_MPS, dir)
+        .map_err(|e| ReportError::step("phase portraits", e))?;
+    Ok(())
+}
+
+/// `flapper modes`.
+pub fn modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(), ReportError> {
+    create(dir)?;
+    flapper_analysis::modes::flight_modes(robot, policy, task, dir).map_err(|e| ReportError::step("flight modes", e))?;
+    Ok(())
+}
+
+/// `flapper robustness` on one reference: the fluid sweep at the paper's ranges, the winds, Table III
+/// at once and, with `envelope`, the level airspeed envelope.
+pub fn robustness(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, envelope: bool, settings: &ReportSettings, dir: &Path) -> Result<(), ReportError> {
+    let period_s = task.control_period_s(robot.timestep_s());
+    let reference = Arc::new(
+        flapper_task::reference::resolve(name, period_s, task.observation.lookahead_steps).map_err(|e| ReportError::step(format!("reference {name}"), e))?,
+    );
+    let mut sweeps = vec![Sweep::Fluid, Sweep::Wind, Sweep::TableIii];
+    if envelope {
+        sweeps.push(Sweep::Envelope);
+    }
+    let sweep_settings = RobustnessSettings {
+        sweeps,
+        episodes: settings.robustness_episodes,
+        seed: settings.seed,
+        ranges: PAPER_RANGES.to_vec(),
+        winds: default_winds(),
+    };
+    let fail = |e: flapper_analysis::AnalysisError| ReportError::step(format!("robustness on {name}"), e);
+    let (report, wind_paths) = run_sweeps(robot, pilot, task, reference.clone(), &sweep_settings, &|_: &str| {}).map_err(fail)?;
+    create(dir)?;
+    write_robustness(&report, &wind_paths, &reference, dir).map_err(fail)?;
+    Ok(())
+}

@@ -1,0 +1,173 @@
+//! The report, last in the flow: every experiment behind the paper's figures run with the shipped
+//! policies (tracking on the named references, system identification, phase portraits, robustness
+//! sweeps), rendered snapshots and a flight video, and one page (`index.html`, `report.md`) that
+//! shows them beside the paper's numbers. Every number on the page is read back from the CSV and
+//! JSON files the run wrote ([`comparison`]).
+
+pub mod comparison;
+mod experiments;
+mod page;
+mod pictures;
+mod tables;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use flapper_eval::tracking::Pilot;
+use flapper_sim::RobotModel;
+
+pub use experiments::TRACKED_REFERENCES;
+
+/// What to run. The defaults regenerate the README's report in about 10 minutes on 2 cores.
+#[derive(Debug, Clone)]
+pub struct ReportSettings {
+    /// The controller whose flights, analysis and robustness the report shows (the final one).
+    pub policy: PathBuf,
+    /// The policies of the curriculum's stages in order (their folders hold `training.csv` and
+    /// `learning_curves.svg`): learning curves and the training table.
+    pub stage_policies: Vec<PathBuf>,
+    /// Randomized starts per named reference.
+    pub episodes: usize,
+    /// Episodes per setting of the robustness sweeps.
+    pub robustness_episodes: usize,
+    pub seed: u64,
+    /// Render the snapshots and the video (needs EGL; the video also ffmpeg).
+    pub pictures: bool,
+}
+
+impl Default for ReportSettings {
+    fn default() -> Self {
+        Self {
+            policy: PathBuf::from(FINAL_POLICY),
+            stage_policies: (1..=4).map(|k| PathBuf::from(format!("policies/stage{k}/policy.safetensors"))).collect(),
+            episodes: 20,
+            robustness_episodes: 10,
+            seed: 1,
+            pictures: true,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("{0}")]
+    Policy(String),
+    #[error("{what}: {message}")]
+    Step { what: String, message: String },
+    #[error("cannot write '{path}': {message}")]
+    Write { path: PathBuf, message: String },
+    #[error("{0}")]
+    Settings(String),
+}
+
+impl ReportError {
+    fn step(what: impl Into<String>, error: impl std::fmt::Display) -> Self {
+        Self::Step { what: what.into(), message: error.to_string() }
+    }
+}
+
+/// What a report run produced.
+#[derive(Debug, Clone)]
+pub struct ReportOutcome {
+    pub index_html: PathBuf,
+    pub report_md: PathBuf,
+    /// Parts left out and why (one line each, e.g. no EGL for the pictures).
+    pub notes: Vec<String>,
+    pub wall_time_s: f64,
+}
+
+/// How many times [`generate`] calls its progress callback (for a progress bar).
+pub fn step_count(settings: &ReportSettings) -> usize {
+    TRACKED_REFERENCES.len() + 3 + 2 + if settings.pictures { 2 } else { 0 } + 1
+}
+
+/// Runs everything and writes the report into `out` (which must exist). `progress` is called after
+/// each step with what was done.
+pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<ReportOutcome, ReportError> {
+    let began = std::time::Instant::now();
+    if settings.episodes == 0 || settings.episodes > 10_000 || settings.robustness_episodes == 0 || settings.robustness_episodes > 10_000 {
+        return Err(ReportError::Settings(format!(
+            "episodes must be 1 to 10000 (got {} for tracking and {} for robustness)",
+            settings.episodes, settings.robustness_episodes
+        )));
+    }
+    let (policy, task) = flapper_train::run::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
+    let policy = Arc::new(policy);
+    let pilot = Pilot::Policy(policy.clone());
+    let mut notes = Vec::new();
+
+    let mut tracked = Vec::new();
+    for name in TRACKED_REFERENCES {
+        tracked.push(experiments::tracking(robot, &pilot, &task, name, settings, &out.join("tracking").join(name))?);
+        progress(&format!("tracking on {name}"));
+    }
+    experiments::sysid(robot, policy.clone(), &task, &out.join("sysid"))?;
+    progress("system identification");
+    experiments::phase(robot, policy.clone(), &task, &out.join("phase"))?;
+    progress("phase portraits");
+    experiments::modes(robot, policy.clone(), &task, &out.join("modes"))?;
+    progress("flight modes");
+    for (name, envelope) in [("longitudinal", true), ("lateral", false)] {
+        experiments::robustness(robot, &pilot, &task, name, envelope, settings, &out.join("robustness").join(name))?;
+        progress(&format!("robustness on {name}"));
+    }
+    let find = |name: &str| tracked.iter().find(|t| t.name == name).expect("every tracked reference is flown");
+    pictures::aerobatic_manoeuvres(find("aerobatic"), &out.join("render"))?;
+    if settings.pictures {
+        let dir = out.join("render");
+        match pictures::snapshots(robot, &[find("loop"), find("sharp-turn"), find("roll-off-the-bottom")], &dir) {
+            Ok(()) => {}
+            Err(e) => notes.push(format!("snapshots not rendered: {e}")),
+        }
+        progress("snapshots");
+        match pictures::video(robot, find("aerobatic"), &dir) {
+            Ok(()) => {}
+            Err(e) => notes.push(format!("video not made: {e}")),
+        }
+        progress("video");
+    } else {
+        notes.push("pictures skipped (--no-pictures)".into());
+    }
+    tables::training(&settings.stage_policies, &out.join("training"))?;
+    tables::model_tables(robot, &task, &out.join("tables"))?;
+    let rows = comparison::compare(out)?;
+    comparison::write_csv(&rows, &out.join("paper_vs_flapper.csv"))?;
+    let wall_time_s = began.elapsed().as_secs_f64();
+    let (index_html, report_md) = page::write(out, settings, &rows, &notes, wall_time_s)?;
+    progress("page");
+    Ok(ReportOutcome { index_html, report_md, notes, wall_time_s })
+}
+
+/// Writes `bytes` to `path` complete or not at all.
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })?;
+    }
+    flapper_plot::write_atomically(path, bytes).map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
+/// `flapper render`: one flight of `policy` on `reference` (a name or a CSV file) from the randomized
+/// start of `seed`, as a chase-camera video (`NAME.mp4`, `NAME_poster.png`) and snapshots overlaid
+/// along its manoeuvre, or along the whole flight for a reference without one (`NAME.png`).
+/// Returns the files written and, when the video could not be made (no ffmpeg), why.
+pub fn render_flight(robot: &RobotModel, policy: &Path, reference: &str, seed: u64, out: &Path) -> Result<(Vec<PathBuf>, Option<String>), ReportError> {
+    let (actor, task) = flapper_train::run::load_flight_policy(policy).map_err(|e| ReportError::Policy(e.to_string()))?;
+    let settings = ReportSettings { policy: policy.to_owned(), episodes: 1, seed, ..ReportSettings::default() };
+    let tracked = experiments::tracking(robot, &Pilot::Policy(Arc::new(actor)), &task, reference, &settings, &out.join("tracking"))?;
+    pictures::snapshots(robot, &[&tracked], out).map_err(|e| ReportError::step("rendering", e))?;
+    let mut written: Vec<PathBuf> = ["robot.png".to_owned(), format!("{}.png", pictures::file_stem(&tracked.name)), format!("{}_poster.png", pictures::file_stem(&tracked.name))]
+        .iter()
+        .map(|f| out.join(f))
+        .collect();
+    match pictures::video(robot, &tracked, out) {
+        Ok(()) => {
+            written.push(out.join(format!("{}.mp4", pictures::file_stem(&tracked.name))));
+            Ok((written, None))
+        }
+        Err(flapper_render::RenderError::NoFfmpeg) => Ok((written, Some(flapper_render::RenderError::NoFfmpeg.to_string()))),
+        Err(e) => Err(ReportError::step("video", e)),
+    }
+}
+
+/// The final shipped controller, the report's default.
+pub const FINAL_POLICY: &str = "policies/stage3/policy.safetensors";
