@@ -1,19 +1,19 @@
 # The README's commands. Each fetches MuJoCo (once) and builds what it needs.
-#   make demo    fly the shipped stage-2 policy (and the scripted baseline) on the paper's longitudinal
-#                reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
+#   make demo    fly the final controller (policies/stage4) and the scripted baseline on the paper's
+#                aerobatic reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
 #   make test    run the whole test suite (what CI runs): Rust tests, then the Python binding's
 #   make python  build the Python package `flapper` (crates/flapper-py) into the virtual environment
 #                .venv (made with $(PYTHON) if missing); `. .venv/bin/activate` then `import flapper`
-#   make train   train stages 1, 2 and 3 from scratch into runs/stage1..3 (see README, "Learned flight")
+#   make train   train stages 1 to 4 from scratch into runs/stage1..4 (see README, "Learned flight")
 #   make bench   simulator, environment, network and end-to-end training throughput
 #   make report-deps  install (Debian/Ubuntu, needs root or sudo) what rendering, video and the browser check
 #                use: Mesa's EGL software renderer, ffmpeg, chromium
 #   make report  regenerate the paper's figures and tables from the shipped policies: run/report/index.html
-#   make evaluate  fly POLICY (default: the stage-3 policy) on every named reference, 100 randomized starts
+#   make evaluate  fly POLICY (default: the final stage-4 policy) on every named reference, 100 randomized starts
 #                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
 .PHONY: demo test train bench baseline mujoco evaluate python python-bench report report-deps
 
-POLICY ?= policies/stage3/policy.safetensors
+POLICY ?= policies/stage4/policy.safetensors
 REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
 
 CARGO ?= cargo
@@ -23,7 +23,7 @@ mujoco:
 	@./scripts/fetch-mujoco.sh
 
 demo: mujoco
-	$(FLAPPER) eval --policy policies/stage2/policy.safetensors --reference longitudinal --episodes 100 --seed 1 --out run/demo
+	$(FLAPPER) eval --policy policies/stage4/policy.safetensors --reference aerobatic --episodes 100 --seed 1 --out run/demo
 
 PYTHON ?= python3
 VENV = .venv
@@ -45,6 +45,8 @@ train: mujoco
 	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1
 	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
 	$(FLAPPER) train --config configs/stage3.toml --init-from runs/stage2/policy.safetensors --out runs/stage3
+	$(FLAPPER) train --config configs/stage4.toml --init-from runs/stage3/policy.safetensors --out runs/stage4a
+	$(FLAPPER) train --config configs/stage4-slow.toml --init-from runs/stage4a/checkpoints/iter_001900.safetensors --out runs/stage4
 
 evaluate: mujoco
 	@for r in $(REFERENCES); do \
@@ -61,6 +63,10 @@ baseline: mujoco
 # the browser check chromium. Skipped when everything is already there.
 REPORT_DEBS = libegl1 libegl-mesa0 libgl1-mesa-dri ffmpeg chromium
 SUDO = $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+report: mujoco
+	@$(MAKE) --no-print-directory report-deps || echo "report: could not install $(REPORT_DEBS); the report is written without the pictures it cannot make"
+	$(FLAPPER) report --out run/report
 
 report-deps:
 	@if dpkg -s $(REPORT_DEBS) >/dev/null 2>&1; then echo "report dependencies present: $(REPORT_DEBS)"; \

@@ -30,7 +30,7 @@ mkdir -p "$lib_dir"
 "$python" - "$wheel" "$lib_file" <<'PY'
 import shutil, sys, zipfile
 wheel, dest = sys.argv[1], sys.argv[2]
-with zipfile.ZipFile(wheel) as z, z.open("mujoco/libmujoco.so.3.17.0") as src, open(dest + ".part", "wb") as out:
+with zipfile.ZipFile(wheel) as z, z.open("mujoco/" + dest.rsplit("/", 1)[-1]) as src, open(dest + ".part", "wb") as out:
     shutil.copyfileobj(src, out)
 PY
 mv "$lib_file.part" "$lib_file"

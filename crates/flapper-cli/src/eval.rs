@@ -22,6 +22,7 @@ pub fn eval_command(
     seed: u64,
     out: &Path,
     baseline: bool,
+    observations: bool,
 ) -> Result<()> {
     if episodes == 0 || episodes > 100_000 {
         bail!("--episodes must be 1 to 100000, got {episodes}");
@@ -52,6 +53,11 @@ pub fn eval_command(
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;
+        if observations {
+            let (_, record) = flapper_eval::tracking::record_episode(robot, pilot, task, reference.clone(), seed, 0)?;
+            let names = flapper_task::observation::ObservationLayout::of(&task.observation).names();
+            write_observations_csv(&record, &names, &dir.join("observations.csv"))?;
+        }
         let plots = write_tracking_plots(&results, &format!("{name} on {}", reference.name()), &dir, 3)?;
         eprintln!("  {name}: {} episodes in {:.1} s, wrote {} and {} plots", episodes, began.elapsed().as_secs_f64(), dir.join("steps.csv").display(), plots.len());
         summaries.push((*name, summary));
@@ -82,5 +88,22 @@ pub fn eval_command(
     let summary_path = out.join("summary.csv");
     flapper_plot::write_atomically(&summary_path, csv.as_bytes()).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
     println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
+    Ok(())
+}
+
+/// `observations.csv`: step, the observation's named columns, then `action_q1`..`action_q5`.
+fn write_observations_csv(record: &flapper_eval::tracking::EpisodeRecord, names: &[String], path: &Path) -> Result<()> {
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    let mut header = vec!["step".to_owned()];
+    header.extend(names.iter().cloned());
+    header.extend((1..=record.actions.first().map_or(5, Vec::len)).map(|k| format!("action_q{k}")));
+    writer.write_record(&header)?;
+    for (step, (observation, action)) in record.observations.iter().zip(&record.actions).enumerate() {
+        let mut row = vec![step.to_string()];
+        row.extend(observation.iter().chain(action).map(|v| v.to_string()));
+        writer.write_record(&row)?;
+    }
+    let bytes = writer.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
+    flapper_plot::write_atomically(path, &bytes).with_context(|| format!("cannot write '{}'", path.display()))?;
     Ok(())
 }

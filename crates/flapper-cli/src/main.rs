@@ -108,6 +108,10 @@ enum Command {
         /// Do not fly the scripted baseline.
         #[arg(long)]
         no_baseline: bool,
+        /// Also write what each pilot saw and did in episode 0 (observations and actions, one row
+        /// per control step) as PILOT/observations.csv: for checking another implementation.
+        #[arg(long)]
+        observations: bool,
     },
     /// Identify the closed loop (robot + policy) as third-order transfer functions from desired to
     /// flown position per axis (paper IV-A): poles, zeros, DC gain, validation fit, stability and
@@ -190,10 +194,10 @@ enum Command {
         #[arg(long, value_name = "FILE", default_value = flapper_report::FINAL_POLICY)]
         policy: PathBuf,
         /// Randomized starts per named reference.
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 100)]
         episodes: usize,
         /// Episodes per setting of the robustness sweeps (fluid coefficients, winds, Table III).
-        #[arg(long, default_value_t = 10)]
+        #[arg(long, default_value_t = 50)]
         robustness_episodes: usize,
         /// Seed of the randomized starts and the drawn dynamics.
         #[arg(long, default_value_t = 1)]
@@ -318,8 +322,8 @@ fn run(cli: Cli) -> Result<()> {
             let overrides = train::Overrides { iterations, seed, envs };
             train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)
         }
-        Command::Eval { policy, reference, episodes, seed, out, no_baseline } => {
-            eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline)
+        Command::Eval { policy, reference, episodes, seed, out, no_baseline, observations } => {
+            eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline, observations)
         }
         Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
         Command::Phase { policy, speed_mps, out } => phase::phase_command(&robot, &policy, speed_mps, &out),

@@ -314,3 +314,29 @@ fn a_folder_holding_files_flapper_did_not_write_is_refused_as_output() {
     }
     assert!(ours.join(".flapper-output").exists() && ours.join("reference.csv").exists());
 }
+
+#[test]
+fn eval_writes_what_the_policy_saw_and_did() {
+    // --observations: episode 0's observations and actions, one row per control step. Each row's
+    // action is the "previous action" of the next row's newest frame (clipped to [-1, 1]), and the
+    // first row's previous action is the reset's (every joint at 0: action 0).
+    let out = scratch("observations");
+    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage2/policy.safetensors");
+    let output = flapper(&[
+        "eval", "--policy", policy.to_str().unwrap(), "--reference", "cruise", "--episodes", "1", "--no-baseline", "--observations", "--out", out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let mut reader = csv::Reader::from_path(out.join("policy/observations.csv")).unwrap();
+    let header = reader.headers().unwrap().clone();
+    assert_eq!(header.len(), 1 + 540 + 5);
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let previous = column("t-0.action.flap_left");
+    let action = column("action_q1");
+    let rows: Vec<Vec<f64>> = reader.records().map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect()).collect();
+    let steps = std::fs::read_to_string(out.join("policy/steps.csv")).unwrap().lines().count() - 1;
+    assert_eq!(rows.len(), steps, "one row per control step of episode 0");
+    assert_eq!(rows[0][previous], 0.0);
+    for pair in rows.windows(2) {
+        assert!((pair[1][previous] - pair[0][action].clamp(-1.0, 1.0)).abs() < 1e-6, "{} vs {}", pair[1][previous], pair[0][action]);
+    }
+}

@@ -169,9 +169,36 @@ fn fly_episodes(
         .into_par_iter()
         .map(|k| {
             let env = FlightEnv::new(robot, config.clone(), ReferenceSource::Fixed(reference.clone()), seed, k)?;
-            Ok(fly_episode(env, pilot, k))
+            Ok(fly_episode(env, pilot, k, None))
         })
         .collect()
+}
+
+/// What the pilot saw and did at each control step of one episode: the observation (normalized
+/// by nothing: the environment's raw numbers, in `ObservationLayout::names()` order) and the action
+/// as the pilot gave it (order q1..q5; the environment clips it to [-1, 1]), for checking another
+/// implementation against flapper.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EpisodeRecord {
+    pub observations: Vec<Vec<f32>>,
+    pub actions: Vec<Vec<f32>>,
+}
+
+/// Episode `episode` of an evaluation with `seed` (the same flight as in [`evaluate_tracking`]),
+/// with its observations and actions.
+pub fn record_episode(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    task: &TaskConfig,
+    reference: Arc<Reference>,
+    seed: u64,
+    episode: usize,
+) -> Result<(EpisodeResult, EpisodeRecord), ModelError> {
+    let config = Arc::new(evaluation_task(task, &reference));
+    let env = FlightEnv::new(robot, config, ReferenceSource::Fixed(reference), seed, episode)?;
+    let mut record = EpisodeRecord::default();
+    let result = fly_episode(env, pilot, episode, Some(&mut record));
+    Ok((result, record))
 }
 
 /// A pilot's state within one episode.
@@ -180,7 +207,7 @@ enum Flying<'a> {
     Scripted { gait: ScriptedGait, action_map: ActionMap },
 }
 
-fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize) -> EpisodeResult {
+fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize, mut record: Option<&mut EpisodeRecord>) -> EpisodeResult {
     let mut flying = match pilot {
         Pilot::Policy(policy) => Flying::Policy {
             policy,
@@ -205,6 +232,12 @@ fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize) -> EpisodeResu
                 let targets = gait.joint_targets(&FlightState::read(env.control().sim()));
                 action = action_map.to_action(&targets).to_vec();
             }
+        }
+        if let Some(record) = record.as_deref_mut() {
+            let mut observation = vec![0.0f32; env.observation_layout().size()];
+            env.observe(&mut observation);
+            record.observations.push(observation);
+            record.actions.push(action.clone());
         }
         let result = env.step(&action);
         let control = env.control();

@@ -109,7 +109,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         &|v| {
             let flap: f64 = v[0].parse().unwrap_or(f64::NAN);
             let off = 100.0 * (flap / 5.3 - 1.0);
-            (format!("{} / {} / {} Hz (flap / wing pitch / tail)", v[0], v[1], v[2]), if off.abs() <= 10.0 { "agrees".into() } else { format!("differs: flap {off:+.0}%") })
+            (format!("{} / {} / {} Hz (flap / wing pitch / tail)", v[0], v[1], v[2]), if off.abs() <= 10.0 { format!("agrees within 10% (flap {off:+.0}%)") } else { format!("differs: flap {off:+.0}%") })
         },
     );
     row(
@@ -202,7 +202,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             &format!("phase portrait (Fig. 6-7): {paper}"),
             "as stated",
             vec![Source::new("phase/phase.json", &format!("/claims/{k}/ours"), 1.0, Format::Text), Source::new("phase/phase.json", &format!("/claims/{k}/confirmed"), 1.0, Format::YesNo)],
-            &|v| (v[0].clone(), if v[1] == "yes" { "agrees".into() } else { "differs".into() }),
+            &|v| (format!("{} (confirmed: {})", v[0], v[1]), if v[1] == "yes" { "agrees".into() } else { "differs".into() }),
         );
     }
     Ok(rows)

@@ -33,6 +33,9 @@ pub struct ReportSettings {
     pub seed: u64,
     /// Render the snapshots and the video (needs EGL; the video also ffmpeg).
     pub pictures: bool,
+    /// Frame size of the video and of the snapshots (pixels, even numbers).
+    pub video_size_px: (usize, usize),
+    pub snapshot_size_px: (usize, usize),
 }
 
 impl Default for ReportSettings {
@@ -40,10 +43,12 @@ impl Default for ReportSettings {
         Self {
             policy: PathBuf::from(FINAL_POLICY),
             stage_policies: (1..=4).map(|k| PathBuf::from(format!("policies/stage{k}/policy.safetensors"))).collect(),
-            episodes: 20,
-            robustness_episodes: 10,
+            episodes: 100,
+            robustness_episodes: 50,
             seed: 1,
             pictures: true,
+            video_size_px: (960, 540),
+            snapshot_size_px: (1280, 720),
         }
     }
 }
@@ -76,6 +81,9 @@ pub struct ReportOutcome {
     pub wall_time_s: f64,
 }
 
+/// The folders a report writes (beside index.html, report.md and paper_vs_flapper.csv).
+const REPORT_PARTS: [&str; 8] = ["tracking", "sysid", "phase", "modes", "robustness", "render", "training", "tables"];
+
 /// How many times [`generate`] calls its progress callback (for a progress bar).
 pub fn step_count(settings: &ReportSettings) -> usize {
     TRACKED_REFERENCES.len() + 3 + 2 + if settings.pictures { 2 } else { 0 } + 1
@@ -93,6 +101,13 @@ pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progr
     }
     let (policy, task) = flapper_train::run::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let policy = Arc::new(policy);
+    // A report folder is regenerated whole: nothing of an earlier run is shown as this one's.
+    for part in REPORT_PARTS {
+        let dir = out.join(part);
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|e| ReportError::Write { path: dir.clone(), message: e.to_string() })?;
+        }
+    }
     let pilot = Pilot::Policy(policy.clone());
     let mut notes = Vec::new();
 
@@ -115,12 +130,12 @@ pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progr
     pictures::aerobatic_manoeuvres(find("aerobatic"), &out.join("render"))?;
     if settings.pictures {
         let dir = out.join("render");
-        match pictures::snapshots(robot, &[find("loop"), find("sharp-turn"), find("roll-off-the-bottom")], &dir) {
+        match pictures::snapshots(robot, &[find("loop"), find("sharp-turn"), find("roll-off-the-bottom")], settings.snapshot_size_px, &dir) {
             Ok(()) => {}
             Err(e) => notes.push(format!("snapshots not rendered: {e}")),
         }
         progress("snapshots");
-        match pictures::video(robot, find("aerobatic"), &dir) {
+        match pictures::video(robot, find("aerobatic"), settings.video_size_px, &dir) {
             Ok(()) => {}
             Err(e) => notes.push(format!("video not made: {e}")),
         }
@@ -154,12 +169,12 @@ pub fn render_flight(robot: &RobotModel, policy: &Path, reference: &str, seed: u
     let (actor, task) = flapper_train::run::load_flight_policy(policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let settings = ReportSettings { policy: policy.to_owned(), episodes: 1, seed, ..ReportSettings::default() };
     let tracked = experiments::tracking(robot, &Pilot::Policy(Arc::new(actor)), &task, reference, &settings, &out.join("tracking"))?;
-    pictures::snapshots(robot, &[&tracked], out).map_err(|e| ReportError::step("rendering", e))?;
+    pictures::snapshots(robot, &[&tracked], settings.snapshot_size_px, out).map_err(|e| ReportError::step("rendering", e))?;
     let mut written: Vec<PathBuf> = ["robot.png".to_owned(), format!("{}.png", pictures::file_stem(&tracked.name)), format!("{}_poster.png", pictures::file_stem(&tracked.name))]
         .iter()
         .map(|f| out.join(f))
         .collect();
-    match pictures::video(robot, &tracked, out) {
+    match pictures::video(robot, &tracked, settings.video_size_px, out) {
         Ok(()) => {
             written.push(out.join(format!("{}.mp4", pictures::file_stem(&tracked.name))));
             Ok((written, None))
@@ -170,4 +185,4 @@ pub fn render_flight(robot: &RobotModel, policy: &Path, reference: &str, seed: u
 }
 
 /// The final shipped controller, the report's default.
-pub const FINAL_POLICY: &str = "policies/stage3/policy.safetensors";
+pub const FINAL_POLICY: &str = "policies/stage4/policy.safetensors";

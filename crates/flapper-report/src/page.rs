@@ -266,6 +266,7 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             format!("{}", s["stage"]),
             s["policy"].as_str().unwrap_or("").to_owned(),
             format!("{}", s["iterations"]),
+            format!("{}", s["runs"]),
             fixed(&Value::from(s["env_steps"].as_f64().unwrap_or(f64::NAN) / 1e6), 2),
             fixed(&Value::from(s["wall_time_s"].as_f64().unwrap_or(f64::NAN) / 60.0), 1),
         ]);
@@ -273,7 +274,7 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             curves.push(figure(&format!("Learning curves of stage {}.", s["stage"]), &format!("training/{file}")));
         }
     }
-    let mut blocks = vec![Block::Table(["stage", "policy", "iterations", "env steps (M)", "wall time (min)"].map(String::from).to_vec(), training_rows)];
+    let mut blocks = vec![Block::Table(["stage", "policy", "iterations", "runs", "env steps (M)", "wall time (min)"].map(String::from).to_vec(), training_rows)];
     blocks.push(Block::Text(format!(
         "In all: {} M steps in {} h ({} steps/s); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
         fixed(&Value::from(training["total_env_steps"].as_f64().unwrap_or(f64::NAN) / 1e6), 1),
@@ -288,6 +289,25 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
 fn html_escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
+
+/// Marks on `<body data-loaded="images N/M, videos K/L">` how many images and videos the browser
+/// loaded: `scripts/check-report.sh` reads it from headless Chromium.
+const LOAD_CHECK: &str = r#"<script>
+window.addEventListener('load', () => {
+  const images = [...document.images];
+  const loaded = images.filter(i => i.complete && i.naturalWidth > 0).length;
+  const videos = [...document.querySelectorAll('video')].map(v => new Promise(done => {
+    if (v.readyState >= 1) { done(true); return; }
+    v.addEventListener('loadedmetadata', () => done(v.videoWidth > 0));
+    v.addEventListener('error', () => done(false));
+    setTimeout(() => done(false), 10000);
+  }));
+  Promise.all(videos).then(ok => {
+    document.body.dataset.loaded = `images ${loaded}/${images.length}, videos ${ok.filter(x => x).length}/${ok.length}`;
+  });
+});
+</script>
+"#;
 
 fn html(out: &Path, sections: &[Section]) -> String {
     let mut page = String::from(
@@ -337,6 +357,7 @@ fn html(out: &Path, sections: &[Section]) -> String {
             }
         }
     }
+    page.push_str(LOAD_CHECK);
     page.push_str("</body>\n</html>\n");
     page
 }
@@ -350,7 +371,10 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
             match block {
                 Block::Text(t) => text.push_str(&format!("{t}\n\n")),
                 Block::Figure(caption, path) if !out.join(path).exists() => text.push_str(&format!("({path} was not made: see the notes above.) {caption}\n\n")),
-                Block::Figure(caption, path) if path.ends_with(".mp4") => text.push_str(&format!("[{caption}]({path})\n\n")),
+                Block::Figure(caption, path) if path.ends_with(".mp4") => {
+                    let poster = path.replace(".mp4", "_poster.png");
+                    text.push_str(&format!("[![{caption}]({poster})]({path})\n\n*{caption} (click for the video)*\n\n"))
+                }
                 Block::Figure(caption, path) => text.push_str(&format!("![{caption}]({path})\n\n*{caption}*\n\n")),
                 Block::Table(header, rows) => {
                     text.push_str(&format!("| {} |\n", header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | ")));

@@ -12,8 +12,6 @@ use flapper_sim::RobotModel;
 use crate::ReportError;
 use crate::experiments::Tracked;
 
-const SNAPSHOT_SIZE: (usize, usize) = (1280, 720);
-const VIDEO_SIZE: (usize, usize) = (960, 540);
 const VIDEO_FPS: u32 = 25;
 const REFERENCE_MARKER: [f32; 4] = [0.85, 0.15, 0.1, 0.9];
 
@@ -40,9 +38,9 @@ fn reference_markers(tracked: &Tracked, start_s: f64, end_s: f64, every_s: f64, 
 }
 
 /// Fig. 1 and the overlays: `render/robot.png`, `render/<reference>.png`.
-pub fn snapshots(robot: &RobotModel, manoeuvres: &[&Tracked], dir: &Path) -> Result<(), RenderError> {
+pub fn snapshots(robot: &RobotModel, manoeuvres: &[&Tracked], (width, height): (usize, usize), dir: &Path) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|e| RenderError::Write { path: dir.display().to_string(), source: e })?;
-    let mut renderer = FlightRenderer::new(robot, SNAPSHOT_SIZE.0, SNAPSHOT_SIZE.1)?;
+    let mut renderer = FlightRenderer::new(robot, width, height)?;
     // Fig. 1: wings raised and pitched, seen from the front left and above.
     renderer.set_annotated(true);
     let at = [0.0, 0.0, 1.2];
@@ -51,7 +49,7 @@ pub fn snapshots(robot: &RobotModel, manoeuvres: &[&Tracked], dir: &Path) -> Res
     write_png(&renderer.render(&robot_pose, &camera)?, &dir.join("robot.png"))?;
     renderer.set_annotated(false);
 
-    let aspect = SNAPSHOT_SIZE.0 as f64 / SNAPSHOT_SIZE.1 as f64;
+    let aspect = width as f64 / height as f64;
     for tracked in manoeuvres {
         let (from_s, to_s, every_s) = match flapper_task::reference::named::manoeuvre_window_s(&tracked.name) {
             Some((start_s, end_s)) => (start_s - 0.6, end_s + 0.6, if end_s - start_s < 1.5 { 0.2 } else { 0.3 }),
@@ -92,9 +90,9 @@ fn view_of(episode: &EpisodeResult, from_s: f64, to_s: f64) -> (f64, f64) {
 
 /// A flight from a chase camera: `<name>.mp4`, and the frame in the middle of its manoeuvre (or of
 /// the flight) as `<name>_poster.png`, written even without ffmpeg.
-pub fn video(robot: &RobotModel, aerobatic: &Tracked, dir: &Path) -> Result<(), RenderError> {
+pub fn video(robot: &RobotModel, aerobatic: &Tracked, (width, height): (usize, usize), dir: &Path) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|e| RenderError::Write { path: dir.display().to_string(), source: e })?;
-    let mut renderer = FlightRenderer::new(robot, VIDEO_SIZE.0, VIDEO_SIZE.1)?;
+    let mut renderer = FlightRenderer::new(robot, width, height)?;
     let episode = shown(aerobatic);
     let stride = ((1.0 / (VIDEO_FPS as f64 * aerobatic.period_s)).round() as usize).max(1);
     let steps: Vec<&TrackingStep> = episode.steps.iter().step_by(stride).collect();
@@ -109,7 +107,7 @@ pub fn video(robot: &RobotModel, aerobatic: &Tracked, dir: &Path) -> Result<(), 
         .unwrap_or(0.5 * aerobatic.reference.duration_s());
     let poster_index = steps.iter().position(|s| s.time_s >= poster_s).unwrap_or(0);
     write_png(&renderer.render(&pose(steps[poster_index]), &cameras[poster_index])?, &dir.join(format!("{stem}_poster.png")))?;
-    let mut encoder = VideoEncoder::start(&dir.join(format!("{stem}.mp4")), VIDEO_SIZE.0, VIDEO_SIZE.1, VIDEO_FPS)?;
+    let mut encoder = VideoEncoder::start(&dir.join(format!("{stem}.mp4")), width, height, VIDEO_FPS)?;
     for (step, camera) in steps.iter().zip(&cameras) {
         encoder.push(&renderer.render(&pose(step), camera)?)?;
     }

@@ -18,6 +18,23 @@ pub fn training(stage_policies: &[std::path::PathBuf], dir: &Path) -> Result<(),
         let Ok(text) = std::fs::read_to_string(&sidecar) else { continue };
         let info: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| ReportError::step(format!("reading '{}'", sidecar.display()), e))?;
+        // A stage trained in several runs keeps the earlier runs' sidecars beside the policy
+        // (`earlier_run*.safetensors.json`): their iterations, steps and time count too.
+        let (mut iterations, mut env_steps, mut wall_time_s) =
+            (info["iteration"].as_f64().unwrap_or(0.0), info["env_steps"].as_f64().unwrap_or(0.0), info["wall_time_s"].as_f64().unwrap_or(0.0));
+        let mut runs = 1;
+        let folder = policy.parent().unwrap_or(Path::new("."));
+        let mut earlier: Vec<_> = std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+        earlier.retain(|p: &std::path::PathBuf| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")));
+        earlier.sort();
+        for path in earlier {
+            let text = std::fs::read_to_string(&path).map_err(|e| ReportError::step(format!("reading '{}'", path.display()), e))?;
+            let run: serde_json::Value = serde_json::from_str(&text).map_err(|e| ReportError::step(format!("reading '{}'", path.display()), e))?;
+            iterations += run["iteration"].as_f64().unwrap_or(0.0);
+            env_steps += run["env_steps"].as_f64().unwrap_or(0.0);
+            wall_time_s += run["wall_time_s"].as_f64().unwrap_or(0.0);
+            runs += 1;
+        }
         let curves = policy.with_file_name("learning_curves.svg");
         let copied = format!("stage{}_learning_curves.svg", k + 1);
         if let Ok(svg) = std::fs::read(&curves) {
@@ -26,9 +43,10 @@ pub fn training(stage_policies: &[std::path::PathBuf], dir: &Path) -> Result<(),
         stages.push(json!({
             "stage": k + 1,
             "policy": policy.display().to_string(),
-            "iterations": info["iteration"],
-            "env_steps": info["env_steps"],
-            "wall_time_s": info["wall_time_s"],
+            "runs": runs,
+            "iterations": iterations,
+            "env_steps": env_steps,
+            "wall_time_s": wall_time_s,
             "learning_curves": if curves.exists() { json!(copied) } else { json!(null) },
         }));
     }

@@ -37,7 +37,7 @@ pub fn time_steps(robot: &RobotModel, blocks: usize, steps_per_block: usize) -> 
             let phase = k as f64 * 0.02 * 5.3 * std::f64::consts::TAU;
             let flap = 0.35 * phase.sin();
             sim.set_joint_targets(&[flap, 0.0, flap, 0.0, -0.17]);
-            // A fault only ends the block early; timing stays per step taken.
+            // A fault restarts the flight inside the block (a rare reset, timed with the steps).
             if sim.step(SUBSTEPS).is_err() {
                 sim.reset(&start);
             }

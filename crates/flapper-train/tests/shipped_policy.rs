@@ -1,6 +1,7 @@
 //! The committed policies still fly: stages 1-2 complete the 30 s cruise reference from the nominal
 //! start and from most randomized starts, close to the path; stage 3 flies the turns of `lateral` and
-//! the `loop` from randomized starts. This guards every later change to the model, the task or the
+//! the `loop` from randomized starts; stage 4 (the final controller) the aerobatic chain and the sharp
+//! turn. This guards every later change to the model, the task or the
 //! learner (a change that breaks the learned flight fails here).
 
 use std::path::PathBuf;
@@ -71,4 +72,12 @@ fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
         assert!(r.went_inverted(), "a loop goes over the top");
         assert!(r.time_to_rejoin_s(6.0, 1.0).is_some_and(|t| t < 3.0), "rejoined after the loop");
     }
+}
+
+#[test]
+fn the_shipped_stage_4_policy_flies_the_aerobatic_chain_and_the_sharp_turn() {
+    // The final controller (`make demo`): 95/100 on `aerobatic` and 100/100 on `sharp-turn` (seed 11).
+    let results = check_tracks("stage4", "aerobatic", 4, 3, 1.0);
+    assert!(results.iter().filter(|r| r.completed()).all(|r| r.went_inverted()), "the aerobatic chain's loop goes over the top");
+    check_tracks("stage4", "sharp-turn", 4, 4, 1.0);
 }

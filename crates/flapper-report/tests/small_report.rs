@@ -1,0 +1,96 @@
+//! A small report end to end (one episode per reference and per robustness setting, small pictures):
+//! every figure of the paper is present, non-empty and on the page, and every number of the
+//! paper-vs-flapper table is the value in the file and key its row names.
+
+use std::path::{Path, PathBuf};
+
+use flapper_report::comparison::Source;
+use flapper_report::{ReportSettings, generate};
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The files behind the paper's figures (Fig. 1-3, 5-11) and the learning curves.
+const FIGURES: [&str; 15] = [
+    "tracking/cruise/joints.svg",
+    "sysid/pole_zero.svg",
+    "sysid/validation.svg",
+    "phase/phase_climb.svg",
+    "phase/phase_turn.svg",
+    "tracking/longitudinal/path.svg",
+    "tracking/lateral/path.svg",
+    "robustness/longitudinal/robustness_wind.svg",
+    "robustness/lateral/robustness_wind.svg",
+    "robustness/longitudinal/robustness_fluid.svg",
+    "robustness/lateral/robustness_fluid.svg",
+    "render/aerobatic_manoeuvres.svg",
+    "modes/modes.svg",
+    "training/stage1_learning_curves.svg",
+    "training/stage3_learning_curves.svg",
+];
+const PICTURES: [&str; 6] =
+    ["render/robot.png", "render/loop.png", "render/sharp-turn.png", "render/roll-off-the-bottom.png", "render/aerobatic_poster.png", "render/aerobatic.mp4"];
+
+#[test]
+fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
+    let robot = flapper_sim::RobotModel::flapper().unwrap();
+    let root = repository();
+    let out = std::env::temp_dir().join(format!("flapper-small-report-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let settings = ReportSettings {
+        policy: root.join("policies/stage3/policy.safetensors"),
+        stage_policies: (1..=4).map(|k| root.join(format!("policies/stage{k}/policy.safetensors"))).collect(),
+        episodes: 1,
+        robustness_episodes: 1,
+        seed: 3,
+        pictures: true,
+        video_size_px: (320, 180),
+        snapshot_size_px: (320, 180),
+    };
+    let outcome = generate(&robot, &settings, &out, &|_| {}).unwrap();
+    let html = std::fs::read_to_string(&outcome.index_html).unwrap();
+    let markdown = std::fs::read_to_string(&outcome.report_md).unwrap();
+
+    // Pictures need EGL (and the video ffmpeg): where they cannot be made, the report says why.
+    let can_render = flapper_render::FlightRenderer::new(&robot, 16, 16).is_ok();
+    let mut expected: Vec<&str> = FIGURES.to_vec();
+    if can_render && flapper_render::ffmpeg_available() {
+        expected.extend(PICTURES);
+    } else {
+        assert!(!outcome.notes.is_empty(), "pictures missing without a note saying why");
+    }
+    for figure in expected {
+        let path = out.join(figure);
+        let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        assert!(size > 0, "{figure} is missing or empty");
+        // src= of an image or a video, or a video's poster=.
+        assert!(html.contains(&format!("=\"{figure}\"")), "{figure} is not on index.html");
+        assert!(markdown.contains(figure), "{figure} is not in report.md");
+    }
+    // Nothing on the page points at a file that is not there.
+    for attribute in ["src=\"", "poster=\""] {
+        for src in html.split(attribute).skip(1).map(|rest| &rest[..rest.find('"').unwrap()]) {
+            assert!(out.join(src).is_file(), "index.html shows '{src}', which was not written");
+        }
+    }
+
+    // The comparison: each number of the flapper column is its source's value.
+    let mut reader = csv::Reader::from_path(out.join("paper_vs_flapper.csv")).unwrap();
+    let mut rows = 0;
+    for record in reader.records() {
+        let record = record.unwrap();
+        let (claim, flapper, sources) = (&record[0], &record[2], &record[4]);
+        assert_ne!(flapper, "not measured", "{claim}");
+        assert!(html.contains(&flapper.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")), "{claim}: not on the page");
+        assert!(!sources.is_empty(), "{claim} names no source");
+        for description in sources.split(' ') {
+            let source = Source::parse(description).unwrap_or_else(|| panic!("{claim}: bad source '{description}'"));
+            let value = source.read(&out).unwrap_or_else(|| panic!("{claim}: '{description}' is not in the run's files"));
+            assert!(flapper.contains(&value), "{claim}: '{flapper}' does not show {value} from {description}");
+        }
+        rows += 1;
+    }
+    assert!(rows >= 14, "only {rows} comparisons");
+    std::fs::remove_dir_all(&out).unwrap();
+}
