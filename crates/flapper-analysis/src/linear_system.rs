@@ -30,6 +30,21 @@ pub fn roots(coefficients: &[f64]) -> Vec<Complex64> {
     found
 }
 
+/// A polynomial in s, highest power first, as text: `+1.0000 s^2 +0.5000 s +0.2500`.
+pub fn polynomial_text(coefficients: &[f64]) -> String {
+    let degree = coefficients.len().saturating_sub(1);
+    coefficients
+        .iter()
+        .enumerate()
+        .map(|(i, c)| match degree - i {
+            0 => format!("{c:+.4}"),
+            1 => format!("{c:+.4} s"),
+            p => format!("{c:+.4} s^{p}"),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Evaluates the polynomial (highest power first) at `s`.
 pub fn evaluate(coefficients: &[f64], s: Complex64) -> Complex64 {
     coefficients.iter().fold(Complex64::new(0.0, 0.0), |acc, &c| acc * s + c)

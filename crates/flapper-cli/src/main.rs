@@ -13,6 +13,7 @@ mod eval;
 mod modes;
 mod output_dir;
 mod phase;
+mod progress;
 mod report;
 mod robustness;
 mod sysid;

@@ -1,12 +1,10 @@
 //! `flapper report` and `flapper render`: the paper's figures regenerated, and one flight rendered.
 
-use std::io::IsTerminal;
 use std::path::Path;
 
 use anyhow::Result;
 use flapper_report::{ReportSettings, generate, render_flight, step_count};
 use flapper_sim::RobotModel;
-use indicatif::{ProgressBar, ProgressStyle};
 
 pub fn report_command(robot: &RobotModel, settings: &ReportSettings, out: &Path) -> Result<()> {
     crate::output_dir::prepare_output_dir(out)?;
@@ -18,20 +16,9 @@ pub fn report_command(robot: &RobotModel, settings: &ReportSettings, out: &Path)
         settings.robustness_episodes,
         settings.seed
     );
-    let bar = ProgressBar::new(step_count(settings) as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} steps  {elapsed_precise}  {msg}").expect("a valid template"));
-    let interactive = std::io::stderr().is_terminal();
-    if !interactive {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
-    let outcome = generate(robot, settings, out, &|done: &str| {
-        bar.set_message(done.to_owned());
-        bar.inc(1);
-        if !interactive {
-            eprintln!("{}/{} ({:.0} s): {done}", bar.position(), bar.length().unwrap_or(0), bar.elapsed().as_secs_f64());
-        }
-    })?;
-    bar.finish_and_clear();
+    let progress = crate::progress::Progress::new(step_count(settings), "steps");
+    let outcome = generate(robot, settings, out, &|done: &str| progress.step_done(done))?;
+    progress.finish();
     for note in &outcome.notes {
         eprintln!("note: {note}");
     }

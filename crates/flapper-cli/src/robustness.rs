@@ -1,7 +1,6 @@
 //! `flapper robustness`: the paper's robustness sweeps (Fig. 8-9) on one reference, with a progress
 //! bar; tables on stdout, CSV, JSON and plots in the output folder.
 
-use std::io::IsTerminal;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -10,7 +9,6 @@ use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, 
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
-use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::load_reference;
 
@@ -66,22 +64,10 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         args.seed,
         settings.sweeps.iter().map(|s| s.name()).collect::<Vec<_>>().join(", ")
     );
-    let bar = ProgressBar::new(settings.settings_count() as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} settings  {elapsed_precise} ETA {eta_precise}  {msg}").expect("a valid template"));
-    let interactive = std::io::stderr().is_terminal();
-    if !interactive {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let progress = crate::progress::Progress::new(settings.settings_count(), "settings");
     let pilot = Pilot::Policy(Arc::new(policy));
-    let (report, wind_paths) = robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| {
-        bar.set_message(done.to_owned());
-        bar.inc(1);
-        if !interactive {
-            // A log gets one line per setting instead of the bar.
-            eprintln!("{}/{} settings ({:.0} s): {done}", bar.position(), bar.length().unwrap_or(0), bar.elapsed().as_secs_f64());
-        }
-    })?;
-    bar.finish_and_clear();
+    let (report, wind_paths) = robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| progress.step_done(done))?;
+    progress.finish();
 
     if !report.fluid.is_empty() {
         println!("fluid coefficients, success rate (%) by range r (x[1 - r, 1 + r], the others nominal, no wind):");

@@ -4,23 +4,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Result, bail};
+use flapper_analysis::linear_system::polynomial_text as polynomial;
 use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
 use flapper_sim::RobotModel;
 use flapper_train::run::load_flight_policy;
-
-fn polynomial(coefficients: &[f64]) -> String {
-    let degree = coefficients.len().saturating_sub(1);
-    coefficients
-        .iter()
-        .enumerate()
-        .map(|(i, c)| match degree - i {
-            0 => format!("{c:+.4}"),
-            1 => format!("{c:+.4} s"),
-            p => format!("{c:+.4} s^{p}"),
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
-}
 
 fn roots(pairs: &[[f64; 2]]) -> String {
     pairs.iter().map(|[re, im]| if *im == 0.0 { format!("{re:.3}") } else { format!("{re:.3}{im:+.3}i") }).collect::<Vec<_>>().join(", ")

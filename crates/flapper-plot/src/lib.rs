@@ -1,11 +1,9 @@
 //! Line charts as SVG: a figure is a grid of panels, each a set of curves on shared axes. The flight
-//! plots (evaluation) and the learning curves (learner) are both drawn with it. Every figure, and
+//! plots (evaluation) and the learning curves (training) are both drawn with it. Every figure, and
 //! every other output file flapper writes, goes to disk through [`write_atomically`]: complete or
 //! absent, never half written.
 
-mod output;
-
-pub use output::write_atomically;
+pub use flapper_files::write_atomically;
 
 use std::path::Path;
 

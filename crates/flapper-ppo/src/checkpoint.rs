@@ -204,9 +204,9 @@ pub fn sidecar_path(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Writes `bytes` to `path` whole or not at all ([`flapper_plot::write_atomically`]).
+/// Writes `bytes` to `path` whole or not at all ([`flapper_files::write_atomically`]).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError> {
-    flapper_plot::write_atomically(path, bytes).map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
+    flapper_files::write_atomically(path, bytes).map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
 }
 
 /// Reads a checkpoint or policy file, checking that every tensor is there with its shape.

@@ -6,14 +6,14 @@
 //!   on `mlp` (forward and backward by hand on `matmul`/gemm, `fast_math` for the activations);
 //! - `storage`: the rollout and its generalized advantages;
 //! - `ppo`: acting, bootstrapping truncated episodes, the clipped loss and its gradients, `adam`;
-//! - `runner`: iterations, CSV log, `checkpoint`s, `curves`; `config`: every setting, rsl_rl's defaults.
+//! - `runner`: iterations, `training_log` (the CSV), `checkpoint`s, checkpoint hooks; `config`: every
+//!   setting, rsl_rl's defaults. Nothing here draws: the training crate plots learning curves.
 
 pub mod actor_critic;
 pub mod adam;
 pub mod benchmark;
 pub mod checkpoint;
 pub mod config;
-pub mod curves;
 pub mod evaluate;
 pub mod fast_math;
 pub mod matmul;
@@ -22,9 +22,10 @@ pub mod normalizer;
 pub mod ppo;
 pub mod runner;
 pub mod storage;
+pub mod training_log;
 pub mod vec_env;
 
 pub use actor_critic::{ActorCritic, InferenceScratch};
 pub use config::{PpoConfig, RunnerConfig, Schedule};
-pub use runner::{IterationLog, Start, TrainError, Trainer};
+pub use runner::{CheckpointEvent, CheckpointHook, IterationLog, Start, TrainError, Trainer};
 pub use vec_env::{EnvError, EpisodeRecord, VecEnv};

@@ -1,10 +1,11 @@
 //! The on-policy runner (rsl_rl's `OnPolicyRunner`): collect a rollout from the vectorized
-//! environments, update, log one CSV row, save checkpoints and learning curves; start fresh, resume a
-//! run, or start from another run's policy.
+//! environments, update, log one CSV row (`training_log`), save checkpoints and call the checkpoint
+//! hooks (the training crate draws learning curves there); start fresh, resume a run, or start from
+//! another run's policy.
 //!
 //! Run folder: `config.toml` (the full config), `training.csv` (one row per iteration),
-//! `learning_curves.svg`, `checkpoints/iter_NNNNNN.safetensors` (+ `.json`), and at the end
-//! `policy.safetensors` (+ `.json`).
+//! `checkpoints/iter_NNNNNN.safetensors` (+ `.json`), and at the end `policy.safetensors` (+ `.json`);
+//! `learning_curves.svg` from the training crate's hook.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,8 +16,8 @@ use rand_chacha::ChaCha8Rng;
 use crate::actor_critic::ActorCritic;
 use crate::checkpoint::{self, CheckpointError};
 use crate::config::{PpoConfig, RunnerConfig};
-use crate::curves::write_learning_curves;
 use crate::ppo::{Ppo, UpdateStats};
+use crate::training_log;
 use crate::vec_env::{EnvError, VecEnv};
 
 #[derive(Debug, thiserror::Error)]
@@ -90,9 +91,22 @@ pub struct Trainer<E: VecEnv> {
     history: Vec<IterationLog>,
     end_reasons: Vec<&'static str>,
     diagnostic_names: Vec<String>,
+    checkpoint_hooks: Vec<CheckpointHook>,
     /// Held while the run lives, so that no second trainer writes into the same folder.
     _run_lock: std::fs::File,
 }
+
+/// What a checkpoint hook sees: the run folder (its `training.csv` is complete up to `iteration`),
+/// this session's iterations, and the names of the episode-end columns.
+pub struct CheckpointEvent<'a> {
+    pub dir: &'a Path,
+    pub iteration: usize,
+    pub history: &'a [IterationLog],
+    pub end_reasons: &'a [&'static str],
+}
+
+/// Called after each checkpoint is saved (e.g. to draw learning curves: the learner draws nothing).
+pub type CheckpointHook = Box<dyn FnMut(&CheckpointEvent) -> Result<(), String> + Send>;
 
 /// Takes the run folder's lock (`dir/.lock`, released by the OS when the process ends).
 fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
@@ -217,7 +231,7 @@ impl<E: VecEnv> Trainer<E> {
         };
         let end_reasons = env.end_reasons();
         let diagnostic_names = env.diagnostic_names();
-        let mut trainer = Self {
+        let trainer = Self {
             env,
             ppo,
             runner,
@@ -229,9 +243,11 @@ impl<E: VecEnv> Trainer<E> {
             history: Vec::new(),
             end_reasons,
             diagnostic_names,
+            checkpoint_hooks: Vec::new(),
             _run_lock: run_lock,
         };
-        trainer.prepare_csv(matches!(start, Start::Resume))?;
+        let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names);
+        training_log::prepare(&trainer.csv_path(), &header, matches!(start, Start::Resume), trainer.iteration)?;
         Ok(trainer)
     }
 
@@ -261,6 +277,11 @@ impl<E: VecEnv> Trainer<E> {
 
     pub fn end_reasons(&self) -> &[&'static str] {
         &self.end_reasons
+    }
+
+    /// Adds a hook run after every checkpoint (and the final one).
+    pub fn add_checkpoint_hook(&mut self, hook: CheckpointHook) {
+        self.checkpoint_hooks.push(hook);
     }
 
     /// Trains to `runner.iterations`, calling `on_iteration` after each; it returns false to stop
@@ -326,12 +347,12 @@ impl<E: VecEnv> Trainer<E> {
                 inference_time_s: inference_time,
                 update_time_s: update_time,
             };
-            self.append_csv(&log)?;
+            training_log::append(&self.csv_path(), &log)?;
             self.history.push(log.clone());
             let last = !on_iteration(&log, &self.ppo.policy) || self.iteration == self.runner.iterations;
             if self.iteration.is_multiple_of(self.runner.checkpoint_every) || last {
                 self.save_checkpoint(log.wall_time_s)?;
-                self.write_curves()?;
+                self.run_checkpoint_hooks()?;
             }
             if last {
                 let path = self.dir.join("policy.safetensors");
@@ -351,122 +372,12 @@ impl<E: VecEnv> Trainer<E> {
         Ok(())
     }
 
-    fn write_curves(&self) -> Result<(), TrainError> {
-        let path = self.dir.join("learning_curves.svg");
-        let rows = read_history(&self.csv_path()).unwrap_or_else(|_| self.history.clone());
-        write_learning_curves(&rows, &self.end_reasons, &path).map_err(|e| TrainError::Output { path, message: e })
-    }
-
-    fn header(&self) -> Vec<String> {
-        let mut h: Vec<String> = [
-            "iteration", "env_steps", "wall_time_s", "steps_per_s", "episodes", "mean_return", "mean_length",
-        ]
-        .map(String::from)
-        .to_vec();
-        h.extend(self.end_reasons.iter().map(|r| format!("end_{r}")));
-        h.push("mean_reward".into());
-        h.extend(self.diagnostic_names.iter().cloned());
-        h.extend(
-            [
-                "surrogate_loss", "value_loss", "entropy", "kl", "clip_fraction", "grad_norm", "learning_rate", "action_std",
-                "env_time_s", "inference_time_s", "update_time_s",
-            ]
-            .map(String::from),
-        );
-        h
-    }
-
-    /// A fresh run writes the header; a resumed one keeps the rows up to its checkpoint (a killed run
-    /// may have logged iterations past its last checkpoint, which the resumed run repeats).
-    fn prepare_csv(&mut self, resume: bool) -> Result<(), TrainError> {
-        let path = self.csv_path();
-        let header = self.header().join(",");
-        let mut text = header.clone() + "\n";
-        if resume && path.exists() {
-            // Read strictly: a damaged log is refused, never silently shortened.
-            let damaged = |problem: String| TrainError::DamagedLog { path: path.clone(), problem };
-            let bytes = std::fs::read(&path).map_err(|e| damaged(format!("cannot be read ({e})")))?;
-            let existing = String::from_utf8(bytes)
-                .map_err(|e| damaged(format!("is not text (invalid UTF-8 at byte {})", e.utf8_error().valid_up_to())))?;
-            for (number, line) in existing.lines().enumerate().skip(1) {
-                let Some(iteration) = line.split(',').next().and_then(|v| v.parse::<usize>().ok()) else {
-                    return Err(damaged(format!("line {} does not start with an iteration number", number + 1)));
-                };
-                if iteration <= self.iteration {
-                    text.push_str(line);
-                    text.push('\n');
-                }
-            }
+    /// Runs the checkpoint hooks (after a checkpoint is saved); a hook's error names the run folder.
+    fn run_checkpoint_hooks(&mut self) -> Result<(), TrainError> {
+        let event = CheckpointEvent { dir: &self.dir, iteration: self.iteration, history: &self.history, end_reasons: &self.end_reasons };
+        for hook in &mut self.checkpoint_hooks {
+            hook(&event).map_err(|message| TrainError::Output { path: self.dir.clone(), message })?;
         }
-        checkpoint::write_atomically(&path, text.as_bytes())?;
         Ok(())
     }
-
-    fn append_csv(&self, log: &IterationLog) -> Result<(), TrainError> {
-        use std::io::Write;
-        let path = self.csv_path();
-        let u = &log.update;
-        let mut fields: Vec<String> = vec![
-            log.iteration.to_string(),
-            log.env_steps.to_string(),
-            format!("{:.3}", log.wall_time_s),
-            format!("{:.1}", log.steps_per_s),
-            log.episodes.to_string(),
-            format!("{:.6}", log.mean_return),
-            format!("{:.3}", log.mean_length),
-        ];
-        fields.extend(log.end_counts.iter().map(|c| c.to_string()));
-        fields.push(format!("{:.6}", log.mean_reward));
-        fields.extend(log.diagnostics.iter().map(|d| format!("{d:.6}")));
-        for v in [u.surrogate_loss, u.value_loss, u.entropy, u.kl, u.clip_fraction, u.grad_norm, u.learning_rate, u.action_std] {
-            fields.push(format!("{v:.9}"));
-        }
-        for v in [log.env_time_s, log.inference_time_s, log.update_time_s] {
-            fields.push(format!("{v:.4}"));
-        }
-        let mut file = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&path)
-            .map_err(|e| TrainError::Output { path: path.clone(), message: e.to_string() })?;
-        writeln!(file, "{}", fields.join(",")).map_err(|e| TrainError::Output { path, message: e.to_string() })
-    }
-}
-
-/// Reads the plotted columns of a training CSV back (for learning curves over resumed runs).
-pub fn read_history(path: &Path) -> Result<Vec<IterationLog>, String> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| e.to_string())?;
-    let headers = reader.headers().map_err(|e| e.to_string())?.clone();
-    let column = |name: &str| headers.iter().position(|h| h == name);
-    let ends: Vec<usize> = headers.iter().enumerate().filter(|(_, h)| h.starts_with("end_")).map(|(i, _)| i).collect();
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| e.to_string())?;
-        let get = |name: &str| column(name).and_then(|i| record.get(i)).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
-        rows.push(IterationLog {
-            iteration: get("iteration") as usize,
-            env_steps: get("env_steps") as u64,
-            wall_time_s: get("wall_time_s"),
-            steps_per_s: get("steps_per_s"),
-            episodes: get("episodes") as usize,
-            mean_return: get("mean_return"),
-            mean_length: get("mean_length"),
-            end_counts: ends.iter().map(|&i| record.get(i).and_then(|v| v.parse().ok()).unwrap_or(0)).collect(),
-            mean_reward: get("mean_reward"),
-            diagnostics: Vec::new(),
-            update: UpdateStats {
-                surrogate_loss: get("surrogate_loss"),
-                value_loss: get("value_loss"),
-                entropy: get("entropy"),
-                kl: get("kl"),
-                clip_fraction: get("clip_fraction"),
-                grad_norm: get("grad_norm"),
-                learning_rate: get("learning_rate"),
-                action_std: get("action_std"),
-            },
-            env_time_s: get("env_time_s"),
-            inference_time_s: get("inference_time_s"),
-            update_time_s: get("update_time_s"),
-        });
-    }
-    Ok(rows)
 }

@@ -33,16 +33,7 @@ fn fixed(v: &Value, decimals: usize) -> String {
 
 fn polynomial(coefficients: &Value) -> String {
     let c: Vec<f64> = coefficients.as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default();
-    let degree = c.len().saturating_sub(1);
-    c.iter()
-        .enumerate()
-        .map(|(i, x)| match degree - i {
-            0 => format!("{x:+.4}"),
-            1 => format!("{x:+.4} s"),
-            p => format!("{x:+.4} s^{p}"),
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
+    flapper_analysis::linear_system::polynomial_text(&c)
 }
 
 fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String], wall_time_s: f64) -> Vec<Section> {

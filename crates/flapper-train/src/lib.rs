@@ -5,6 +5,7 @@
 
 pub mod benchmark;
 pub mod config;
+pub mod curves;
 pub mod flight_envs;
 pub mod inverted_pendulum;
 pub mod run;

@@ -46,7 +46,9 @@ pub fn load_flight_policy(path: &Path) -> Result<(flapper_ppo::ActorCritic, flap
 pub fn flight_trainer(robot: &RobotModel, config: &TrainConfig, dir: &Path, start: Start) -> Result<Trainer<FlightEnvs>, RunError> {
     let r = &config.runner;
     let envs = FlightEnvs::new(robot, config.task.clone(), r.envs, r.seed, r.thread_count())?;
-    Ok(Trainer::new(envs, config.ppo.clone(), r.clone(), config.to_toml(), dir, start)?)
+    let mut trainer = Trainer::new(envs, config.ppo.clone(), r.clone(), config.to_toml(), dir, start)?;
+    trainer.add_checkpoint_hook(crate::curves::learning_curves_hook());
+    Ok(trainer)
 }
 
 /// Settings for the inverted pendulum: rsl_rl's PPO with smaller networks and fewer environments.
@@ -74,6 +76,7 @@ pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes:
     let envs = InvertedPendulumEnvs::new(runner.envs, seed).map_err(TrainError::Env)?;
     let config_text = format!("# inverted pendulum check, seed {seed}\n");
     let mut trainer = Trainer::new(envs, ppo, runner, config_text, dir, Start::Fresh)?;
+    trainer.add_checkpoint_hook(crate::curves::learning_curves_hook());
     let time_limit_column = trainer.end_reasons().iter().position(|r| *r == TIME_LIMIT).expect("the pendulum reports time limits");
     let mut recent: Vec<f64> = Vec::new();
     let mut outcome = PendulumOutcome { steps_to_solve: None, iterations: 0, test_returns: Vec::new() };

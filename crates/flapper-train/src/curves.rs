@@ -1,11 +1,21 @@
-//! Learning curves of a run as one SVG: return, episode length, how episodes end, losses, KL and
-//! learning rate, action noise, throughput, each against environment steps.
+//! Learning curves of a run as one SVG (`learning_curves.svg`): return, episode length, how episodes
+//! end, losses, KL and learning rate, action noise, throughput, each against environment steps. Drawn
+//! after every checkpoint through the runner's checkpoint hook, from the whole `training.csv` (so a
+//! resumed run's curves cover every session).
 
 use std::path::Path;
 
 use flapper_plot::{COLORS, Curve, Panel, draw};
+use flapper_ppo::training_log::read_history;
+use flapper_ppo::{CheckpointEvent, CheckpointHook, IterationLog};
 
-use crate::runner::IterationLog;
+/// The hook that redraws `DIR/learning_curves.svg` after each checkpoint.
+pub fn learning_curves_hook() -> CheckpointHook {
+    Box::new(|event: &CheckpointEvent| {
+        let rows = read_history(&event.dir.join("training.csv")).unwrap_or_else(|_| event.history.to_vec());
+        write_learning_curves(&rows, event.end_reasons, &event.dir.join("learning_curves.svg"))
+    })
+}
 
 /// Writes the curves of `rows` to `path`; `end_reasons` name the columns of `end_counts`.
 pub fn write_learning_curves(rows: &[IterationLog], end_reasons: &[&str], path: &Path) -> Result<(), String> {

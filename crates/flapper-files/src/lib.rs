@@ -1,4 +1,5 @@
-//! The one way flapper writes an output file.
+//! The one way flapper writes an output file: complete or absent, never half written. Every crate
+//! that writes files (learner checkpoints, plots, evaluation CSVs, the report) goes through it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
