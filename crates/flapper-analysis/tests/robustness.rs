@@ -11,7 +11,7 @@ use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomi
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
 use flapper_task::randomization::randomize;
 use flapper_task::reference::named::named;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 use rand::SeedableRng;
 
 /// Tallies agree (NaN RMS, when nothing completed, agrees with NaN).

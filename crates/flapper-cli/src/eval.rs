@@ -10,7 +10,7 @@ use flapper_eval::tracking::{Pilot, evaluate_tracking};
 use flapper_eval::tracking_report::{TrackingSummary, write_steps_csv, write_tracking_plots};
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 use crate::load_reference;
 
@@ -68,25 +68,20 @@ pub fn eval_command(
         print!("{name:>26}");
     }
     println!();
-    let mut csv = String::from("metric");
-    for (name, _) in &summaries {
-        csv.push(',');
-        csv.push_str(name);
-    }
-    csv.push('\n');
+    // summary.csv: a row per metric, a column per pilot (the printed table), quoted by the csv crate.
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    csv.write_record(std::iter::once("metric").chain(summaries.iter().map(|(name, _)| *name)))?;
     for (k, (label, _)) in tables[0].iter().enumerate() {
         print!("{label:<36}");
-        csv.push_str(&format!("\"{label}\""));
         for table in &tables {
-            let value = &table[k].1;
-            print!("{value:>26}");
-            csv.push_str(&format!(",\"{value}\""));
+            print!("{:>26}", table[k].1);
         }
         println!();
-        csv.push('\n');
+        csv.write_record(std::iter::once(label.as_str()).chain(tables.iter().map(|t| t[k].1.as_str())))?;
     }
+    let csv = csv.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
     let summary_path = out.join("summary.csv");
-    flapper_plot::write_atomically(&summary_path, csv.as_bytes()).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
+    flapper_plot::write_atomically(&summary_path, &csv).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
     println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
     Ok(())
 }

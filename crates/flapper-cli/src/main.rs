@@ -280,6 +280,10 @@ fn main() -> ExitCode {
     // MuJoCo's messages go through `log` (silent by default) instead of stdout and MUJOCO_LOG.TXT.
     // SAFETY: called first thing, before any thread exists or MuJoCo is used.
     unsafe { mujoco_rs::prelude::install_logging_hook() };
+    // Piped into `head` and the like, stop quietly when the reader goes away (as Unix tools do)
+    // instead of panicking on the next print.
+    // SAFETY: restores the default signal disposition before any thread exists.
+    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(error) if !error.use_stderr() => {
@@ -455,10 +459,7 @@ fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64)
     let loaded = load_reference(reference, dt_s, 0)?;
     crate::output_dir::prepare_output_dir(out)?;
     let csv_path = out.join("reference.csv");
-    let mut text = String::from("time_s,x_m,y_m,z_m\n");
-    for (k, p) in loaded.points().iter().enumerate() {
-        text.push_str(&format!("{:.3},{:.4},{:.4},{:.4}\n", k as f64 * dt_s, p.x, p.y, p.z));
-    }
+    let text = flapper_task::reference::csv_file::reference_csv_text(loaded.points(), dt_s);
     flapper_plot::write_atomically(&csv_path, text.as_bytes()).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
     let plot = out.join("reference.svg");
     flapper_eval::write_path_views(loaded.points(), loaded.name(), &plot)?;

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use flapper_analysis::modes::flight_modes;
 use flapper_sim::RobotModel;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 pub fn modes_command(robot: &RobotModel, policy_path: &Path, out: &Path) -> Result<()> {
     let (policy, task) = load_flight_policy(policy_path)?;

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use flapper_analysis::phase::phase_portraits;
 use flapper_sim::RobotModel;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out: &Path) -> Result<()> {
     if !(speed_mps.is_finite() && (2.0..=6.0).contains(&speed_mps)) {

@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, Sweep, robustness, write_robustness};
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 use crate::load_reference;
 

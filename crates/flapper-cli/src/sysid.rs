@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use flapper_analysis::linear_system::polynomial_text as polynomial;
 use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
 use flapper_sim::RobotModel;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 fn roots(pairs: &[[f64; 2]]) -> String {
     pairs.iter().map(|[re, im]| if *im == 0.0 { format!("{re:.3}") } else { format!("{re:.3}{im:+.3}i") }).collect::<Vec<_>>().join(", ")

@@ -167,6 +167,13 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     for file in ["summary.csv", "policy/steps.csv", "policy/path_3d.svg", "policy/path.svg", "policy/error.svg", "policy/joints.svg", "scripted/steps.csv"] {
         assert!(eval_out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
     }
+    // summary.csv is the printed table: a row per metric (labels with commas stay one field), a column per pilot.
+    let mut summary = csv::Reader::from_path(eval_out.join("summary.csv")).unwrap();
+    assert_eq!(summary.headers().unwrap().iter().collect::<Vec<_>>(), ["metric", "policy", "scripted"]);
+    let rows: Vec<csv::StringRecord> = summary.records().map(|r| r.unwrap()).collect();
+    assert!(rows.iter().all(|r| r.len() == 3));
+    assert_eq!(&rows[0][0], "completed");
+    assert!(rows.iter().any(|r| r[0].contains("mechanical power (W), net")), "a label with a comma is one field");
 }
 
 #[test]

@@ -6,6 +6,7 @@ mod controller;
 mod flight;
 mod flight_log;
 mod plots;
+pub mod policy_file;
 mod scripted;
 pub mod spectrum;
 pub mod tracking;
@@ -15,6 +16,7 @@ pub use controller::{Controller, FlightState, GlideController};
 pub use flight::{FlightSpec, fly, fly_simulator};
 pub use flight_log::{FlightLog, FlightRow, FlightSummary};
 pub use plots::{write_flight_plots, write_path_views};
+pub use policy_file::{PolicyFileError, load_flight_policy};
 pub use scripted::{ScriptedGait, ScriptedGaitConfig};
 
 /// Writing results failed.

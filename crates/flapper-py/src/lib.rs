@@ -44,7 +44,7 @@ fn task_of(stage: Option<i64>, config: Option<&str>, policy: Option<&str>) -> Py
         (None, Some(path), None) => {
             Ok(flapper_train::config::TrainConfig::load(Path::new(path), None).map_err(value_error)?.task)
         }
-        (None, None, Some(path)) => Ok(flapper_train::run::load_flight_policy(Path::new(path)).map_err(value_error)?.1),
+        (None, None, Some(path)) => Ok(flapper_eval::load_flight_policy(Path::new(path)).map_err(value_error)?.1),
         (None, None, None) => TaskConfig::stage(1).map_err(value_error),
         _ => Err(PyValueError::new_err("give one of stage, config or policy, not several")),
     }
@@ -254,7 +254,7 @@ struct Policy {
 impl Policy {
     #[staticmethod]
     fn load(path: &str) -> PyResult<Self> {
-        let (policy, task) = flapper_train::run::load_flight_policy(Path::new(path)).map_err(value_error)?;
+        let (policy, task) = flapper_eval::load_flight_policy(Path::new(path)).map_err(value_error)?;
         Ok(Self { policy, task_toml: toml::to_string(&task).map_err(value_error)? })
     }
 

@@ -99,7 +99,7 @@ pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progr
             settings.episodes, settings.robustness_episodes
         )));
     }
-    let (policy, task) = flapper_train::run::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
+    let (policy, task) = flapper_eval::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let policy = Arc::new(policy);
     // A report folder is regenerated whole: nothing of an earlier run is shown as this one's.
     for part in REPORT_PARTS {
@@ -166,7 +166,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
 /// along its manoeuvre, or along the whole flight for a reference without one (`NAME.png`).
 /// Returns the files written and, when the video could not be made (no ffmpeg), why.
 pub fn render_flight(robot: &RobotModel, policy: &Path, reference: &str, seed: u64, out: &Path) -> Result<(Vec<PathBuf>, Option<String>), ReportError> {
-    let (actor, task) = flapper_train::run::load_flight_policy(policy).map_err(|e| ReportError::Policy(e.to_string()))?;
+    let (actor, task) = flapper_eval::load_flight_policy(policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let settings = ReportSettings { policy: policy.to_owned(), episodes: 1, seed, ..ReportSettings::default() };
     let tracked = experiments::tracking(robot, &Pilot::Policy(Arc::new(actor)), &task, reference, &settings, &out.join("tracking"))?;
     pictures::snapshots(robot, &[&tracked], settings.snapshot_size_px, out).map_err(|e| ReportError::step("rendering", e))?;

@@ -32,16 +32,6 @@ pub fn saved_config(dir: &Path) -> Result<TrainConfig, RunError> {
     Ok(TrainConfig::load(&path, None)?)
 }
 
-/// A trained flight policy and the task it was trained on (from the config saved in the file),
-/// checked to fit that task's observation and action layout.
-pub fn load_flight_policy(path: &Path) -> Result<(flapper_ppo::ActorCritic, flapper_task::TaskConfig), RunError> {
-    let loaded = flapper_ppo::checkpoint::load(path).map_err(TrainError::from)?;
-    let task = TrainConfig::from_toml(&loaded.info.config_toml, &format!("{} (its saved config)", path.display()), None)?.task;
-    let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
-    loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE).map_err(TrainError::from)?;
-    Ok((loaded.policy, task))
-}
-
 /// A trainer for the flight task in `dir`.
 pub fn flight_trainer(robot: &RobotModel, config: &TrainConfig, dir: &Path, start: Start) -> Result<Trainer<FlightEnvs>, RunError> {
     let r = &config.runner;

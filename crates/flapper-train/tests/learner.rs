@@ -235,3 +235,16 @@ fn nothing_saved_is_lost_user_files_damaged_logs_and_failed_writes() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
     assert!(target.join("inside").is_dir());
 }
+
+#[test]
+fn evaluation_reads_the_same_task_from_a_policy_as_training_saved() {
+    // flapper_eval::load_flight_policy reads only the saved config's [task]; it must be the task the
+    // run trained on, for every shipped policy.
+    for stage in 1..=4 {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../policies/stage{stage}/policy.safetensors"));
+        let saved = flapper_ppo::checkpoint::load(&path).unwrap().info.config_toml;
+        let trained = TrainConfig::from_toml(&saved, "saved", None).unwrap().task;
+        let (_, evaluated) = flapper_eval::load_flight_policy(&path).unwrap();
+        assert_eq!(evaluated, trained, "stage {stage}");
+    }
+}

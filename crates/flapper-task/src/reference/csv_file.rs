@@ -24,6 +24,29 @@ pub enum ReferenceFileError {
     Whole { path: String, message: String },
 }
 
+/// One row of a reference CSV as flapper writes it (`flapper reference`); the reader accepts any
+/// header names and uses the first four columns.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ReferenceRow {
+    pub time_s: f64,
+    pub x_m: f64,
+    pub y_m: f64,
+    pub z_m: f64,
+}
+
+/// The reference's points, sampled every `dt_s`, as CSV text (header `time_s,x_m,y_m,z_m`; times to
+/// the millisecond, positions to 0.1 mm): the format [`parse_reference_csv`] reads back.
+pub fn reference_csv_text(points: &[Vec3], dt_s: f64) -> String {
+    // Rounded through decimal text, so that the shortest representation is the rounded one.
+    let round = |v: f64, decimals: usize| format!("{v:.decimals$}").parse::<f64>().expect("a formatted number parses");
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    for (k, p) in points.iter().enumerate() {
+        let row = ReferenceRow { time_s: round(k as f64 * dt_s, 3), x_m: round(p.x, 4), y_m: round(p.y, 4), z_m: round(p.z, 4) };
+        writer.serialize(row).expect("numbers serialize");
+    }
+    String::from_utf8(writer.into_inner().expect("writing to memory")).expect("CSV of numbers is UTF-8")
+}
+
 /// Loads and checks a reference CSV, resampled every `dt_s`. It must cover at least
 /// `lookahead_steps + 1` control steps.
 pub fn load_reference_csv(path: &Path, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
@@ -136,4 +159,21 @@ pub fn reference_from_points(points: &[[f64; 3]], origin: &str, dt_s: f64, looka
         return Err(whole(format!("covers {:.0} s; at most {MAX_REFERENCE_DURATION_S} s are accepted", (checked.len() - 1) as f64 * dt_s)));
     }
     Ok(Reference::new(origin, dt_s, checked))
+}
+
+#[cfg(test)]
+mod written_tests {
+    use super::*;
+
+    #[test]
+    fn a_written_reference_reads_back() {
+        let reference = super::super::named::named("loop", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.0).unwrap();
+        let text = reference_csv_text(reference.points(), 0.02);
+        assert!(text.starts_with("time_s,x_m,y_m,z_m\n"), "{}", &text[..40]);
+        let back = parse_reference_csv(&text, "written", 0.02, 0).unwrap();
+        assert_eq!(back.len(), reference.len());
+        for (a, b) in back.points().iter().zip(reference.points()) {
+            assert!((*a - *b).length() < 1e-3, "{a:?} vs {b:?}");
+        }
+    }
 }

@@ -11,7 +11,7 @@ use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
 use flapper_sim::{RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::reference::named::named;
-use flapper_train::run::load_flight_policy;
+use flapper_eval::load_flight_policy;
 
 /// The shipped policy of `stage`, its task, and the named `reference` with the policy's lookahead.
 fn shipped(stage: &str, reference: &str) -> (RobotModel, Pilot, TaskConfig, Arc<flapper_task::reference::Reference>) {

@@ -1,0 +1,39 @@
+//! Loading a trained flight policy for flying it: the networks from the file, and the task it was
+//! trained on from the config saved inside (only its `[task]` table: evaluation needs nothing of the
+//! learner's settings, so evaluation does not depend on the training crate).
+
+use std::path::Path;
+
+use flapper_ppo::ActorCritic;
+use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_task::TaskConfig;
+use flapper_task::config::ConfigError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyFileError {
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    #[error("config '{origin}': {message}")]
+    Parse { origin: String, message: String },
+    #[error("config '{origin}', [task]: {source}")]
+    Task { origin: String, source: ConfigError },
+}
+
+/// A trained flight policy (a policy file or a checkpoint) and the task it was trained on, checked to
+/// fit that task's observation and action layout.
+pub fn load_flight_policy(path: &Path) -> Result<(ActorCritic, TaskConfig), PolicyFileError> {
+    let loaded = checkpoint::load(path)?;
+    let origin = format!("{} (its saved config)", path.display());
+    let parse = |message: String| PolicyFileError::Parse { origin: origin.clone(), message };
+    let mut saved: toml::Table = loaded.info.config_toml.parse().map_err(|e: toml::de::Error| parse(e.to_string()))?;
+    let task_table = match saved.remove("task") {
+        Some(toml::Value::Table(t)) => t,
+        Some(_) => return Err(parse("[task] must be a table".into())),
+        None => toml::Table::new(),
+    };
+    let text = toml::to_string(&task_table).map_err(|e| parse(e.to_string()))?;
+    let task = TaskConfig::from_toml(&text, &origin).map_err(|source| PolicyFileError::Task { origin: origin.clone(), source })?;
+    let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
+    loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
+    Ok((loaded.policy, task))
+}
