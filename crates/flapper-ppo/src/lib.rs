@@ -5,7 +5,8 @@
 //! - `normalizer`, `actor_critic`: the policy (observation statistics, actor, log-std, critic), built
 //!   on `mlp` (forward and backward by hand on `matmul`/gemm, `fast_math` for the activations);
 //! - `storage`: the rollout and its generalized advantages;
-//! - `ppo`: acting, bootstrapping truncated episodes, the clipped loss and its gradients, `adam`;
+//! - `ppo`: acting, bootstrapping truncated episodes, the update (`loss`: the clipped loss and its
+//!   gradients), `adam`;
 //! - `runner`: iterations, `training_log` (the CSV), `checkpoint`s, checkpoint hooks; `config`: every
 //!   setting, rsl_rl's defaults. Nothing here draws: the training crate plots learning curves.
 
@@ -16,6 +17,7 @@ pub mod checkpoint;
 pub mod config;
 pub mod evaluate;
 pub mod fast_math;
+pub mod loss;
 pub mod matmul;
 pub mod mlp;
 pub mod normalizer;

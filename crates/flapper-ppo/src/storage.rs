@@ -2,6 +2,22 @@
 //! returns and advantages computed from it (generalized advantage estimation, Schulman et al. 2016).
 //! Arrays are step-major: index = step * envs + env.
 
+/// One step of every environment as the learner collected it (rsl_rl's `Transition`): filled by
+/// `Ppo::act` (observations, actions, log-probabilities, means, values) and `Ppo::process_step`
+/// (rewards, dones), then stored with [`RolloutStorage::add_transition`]. Row-major per environment.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Transition {
+    /// Normalized observations the actions were taken at.
+    pub observations: Vec<f32>,
+    pub actions: Vec<f32>,
+    pub log_probs: Vec<f32>,
+    pub means: Vec<f32>,
+    pub values: Vec<f32>,
+    pub rewards: Vec<f32>,
+    pub dones: Vec<bool>,
+}
+
+/// Read by the update; written only through [`RolloutStorage::add_transition`].
 #[derive(Debug, Clone)]
 pub struct RolloutStorage {
     pub steps: usize,
@@ -64,9 +80,18 @@ impl RolloutStorage {
         self.filled
     }
 
-    /// Marks the current step filled (its slices were written through the public fields).
-    pub fn advance(&mut self) {
+    /// Stores one step of every environment in the next free rows.
+    pub fn add_transition(&mut self, t: &Transition) {
         assert!(self.filled < self.steps, "rollout storage is full");
+        let rows = self.rows(self.filled);
+        let (o, a) = (self.observation_size, self.action_size);
+        self.observations[rows.start * o..rows.end * o].copy_from_slice(&t.observations);
+        self.actions[rows.start * a..rows.end * a].copy_from_slice(&t.actions);
+        self.means[rows.start * a..rows.end * a].copy_from_slice(&t.means);
+        self.log_probs[rows.clone()].copy_from_slice(&t.log_probs);
+        self.values[rows.clone()].copy_from_slice(&t.values);
+        self.rewards[rows.clone()].copy_from_slice(&t.rewards);
+        self.dones[rows].copy_from_slice(&t.dones);
         self.filled += 1;
     }
 
@@ -117,13 +142,39 @@ mod tests {
 
     fn filled(rewards: &[f32], values: &[f32], dones: &[bool]) -> RolloutStorage {
         let mut s = RolloutStorage::new(rewards.len(), 1, 1, 1);
-        s.rewards.copy_from_slice(rewards);
-        s.values.copy_from_slice(values);
-        s.dones.copy_from_slice(dones);
-        for _ in 0..rewards.len() {
-            s.advance();
+        for k in 0..rewards.len() {
+            s.add_transition(&Transition {
+                observations: vec![k as f32],
+                actions: vec![0.5],
+                log_probs: vec![-1.0],
+                means: vec![0.25],
+                values: vec![values[k]],
+                rewards: vec![rewards[k]],
+                dones: vec![dones[k]],
+            });
         }
+        assert!(s.is_full());
         s
+    }
+
+    #[test]
+    fn a_transition_lands_in_its_step_rows() {
+        let mut s = RolloutStorage::new(2, 2, 3, 1);
+        let step = |v: f32| Transition {
+            observations: vec![v; 6],
+            actions: vec![v; 2],
+            log_probs: vec![v; 2],
+            means: vec![v; 2],
+            values: vec![v; 2],
+            rewards: vec![v; 2],
+            dones: vec![v > 1.5; 2],
+        };
+        s.add_transition(&step(1.0));
+        s.add_transition(&step(2.0));
+        assert_eq!(s.observations, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0]);
+        assert_eq!(s.rewards, [1.0, 1.0, 2.0, 2.0]);
+        assert_eq!(s.dones, [false, false, true, true]);
+        assert!(s.is_full());
     }
 
     #[test]

@@ -1,0 +1,363 @@
+//! The PPO loss and its gradients (rsl_rl's `ppo.py` update maths): the clipped surrogate, the
+//! (optionally clipped) value loss and the entropy bonus of one minibatch, differentiated by hand
+//! through the actor, the critic and the log-std, and checked against finite differences below.
+
+use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
+use crate::config::PpoConfig;
+use crate::mlp::Workspace;
+
+/// Gradients of the loss, shaped like the parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gradients {
+    pub actor: Vec<f32>,
+    pub critic: Vec<f32>,
+    pub log_std: Vec<f32>,
+}
+
+impl Gradients {
+    pub fn zeros(policy: &ActorCritic) -> Self {
+        Self {
+            actor: vec![0.0; policy.actor.params().len()],
+            critic: vec![0.0; policy.critic.params().len()],
+            log_std: vec![0.0; policy.log_std.len()],
+        }
+    }
+
+    /// Scales all gradients together so their global L2 norm is at most `max_norm`; returns the norm
+    /// before clipping.
+    pub fn clip_global_norm(&mut self, max_norm: f32) -> f32 {
+        let squares: f64 =
+            [&self.actor, &self.critic, &self.log_std].iter().flat_map(|g| g.iter()).map(|&g| (g as f64) * (g as f64)).sum();
+        let norm = squares.sqrt() as f32;
+        if norm > max_norm {
+            let scale = max_norm / (norm + 1e-6);
+            for g in [&mut self.actor, &mut self.critic, &mut self.log_std] {
+                g.iter_mut().for_each(|x| *x *= scale);
+            }
+        }
+        norm
+    }
+}
+
+/// One minibatch of samples, gathered from the rollout.
+#[derive(Debug, Clone, Default)]
+pub struct Minibatch {
+    pub size: usize,
+    pub observations: Vec<f32>,
+    pub actions: Vec<f32>,
+    pub old_log_probs: Vec<f32>,
+    pub old_means: Vec<f32>,
+    /// log sigma of the policy that collected the samples.
+    pub old_log_std: Vec<f32>,
+    pub old_values: Vec<f32>,
+    pub advantages: Vec<f32>,
+    pub returns: Vec<f32>,
+}
+
+/// The loss of one minibatch and its parts.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LossTerms {
+    pub surrogate: f64,
+    pub value: f64,
+    /// Mean entropy of the action distribution.
+    pub entropy: f64,
+    /// Mean KL(pi_old || pi) over the minibatch.
+    pub kl: f64,
+    /// Fraction of samples whose ratio lies outside [1 - clip, 1 + clip].
+    pub clip_fraction: f64,
+    /// surrogate + value_loss_coef value - entropy_coef entropy.
+    pub total: f64,
+}
+
+/// Scratch buffers of the loss computation.
+#[derive(Debug, Clone, Default)]
+pub struct LossScratch {
+    actor: Workspace,
+    critic: Workspace,
+    d_mean: Vec<f32>,
+    d_value: Vec<f32>,
+}
+
+/// The loss of `batch` under `policy` and its gradient with respect to every parameter (written into
+/// `grads`). The maths of PPO in one function, checked against finite differences in the tests. With
+/// two or more threads the actor's and the critic's halves run side by side, one thread each (at these
+/// sizes that beats splitting each matrix product over the threads).
+pub fn loss_and_gradients(
+    policy: &ActorCritic,
+    config: &PpoConfig,
+    batch: &Minibatch,
+    scratch: &mut LossScratch,
+    grads: &mut Gradients,
+    threads: usize,
+) -> LossTerms {
+    let LossScratch { actor, critic, d_mean, d_value } = scratch;
+    let Gradients { actor: actor_grads, critic: critic_grads, log_std: log_std_grads } = grads;
+    let (mut terms, value_loss) = if threads >= 2 {
+        rayon::join(
+            || policy_loss(policy, config, batch, actor, d_mean, actor_grads, log_std_grads, 1),
+            || value_loss(policy, config, batch, critic, d_value, critic_grads, 1),
+        )
+    } else {
+        (
+            policy_loss(policy, config, batch, actor, d_mean, actor_grads, log_std_grads, threads),
+            value_loss(policy, config, batch, critic, d_value, critic_grads, threads),
+        )
+    };
+    terms.value = value_loss;
+    terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value - config.entropy_coef as f64 * terms.entropy;
+    terms
+}
+
+/// The clipped surrogate minus the entropy bonus, and its gradients for the actor and the log-std.
+#[allow(clippy::too_many_arguments)]
+fn policy_loss(
+    policy: &ActorCritic,
+    config: &PpoConfig,
+    batch: &Minibatch,
+    workspace: &mut Workspace,
+    d_mean: &mut Vec<f32>,
+    actor_grads: &mut [f32],
+    log_std_grads: &mut [f32],
+    threads: usize,
+) -> LossTerms {
+    let (n, a_size) = (batch.size, policy.action_size());
+    let inv_n = 1.0 / n as f32;
+    let std: Vec<f32> = policy.log_std.iter().map(|s| s.exp()).collect();
+    let inv_var: Vec<f32> = std.iter().map(|s| 1.0 / (s * s)).collect();
+    let old_var: Vec<f32> = batch.old_log_std.iter().map(|s| (2.0 * s).exp()).collect();
+    let log_std_sum: f32 = policy.log_std.iter().sum();
+    let eps = config.clip;
+
+    let means = policy.actor.forward(&batch.observations, n, workspace, threads);
+    d_mean.resize(n * a_size, 0.0);
+    log_std_grads.iter_mut().for_each(|g| *g = 0.0);
+    let mut terms = LossTerms::default();
+    for i in 0..n {
+        let row = i * a_size..(i + 1) * a_size;
+        let (mu, action, old_mu) = (&means[row.clone()], &batch.actions[row.clone()], &batch.old_means[row.clone()]);
+        let mut log_prob = -log_std_sum - a_size as f32 * HALF_LN_2PI;
+        let mut kl = 0.0f32;
+        for j in 0..a_size {
+            let diff = action[j] - mu[j];
+            log_prob -= 0.5 * diff * diff * inv_var[j];
+            let mean_shift = old_mu[j] - mu[j];
+            kl += policy.log_std[j] - batch.old_log_std[j] + (old_var[j] + mean_shift * mean_shift) * 0.5 * inv_var[j] - 0.5;
+        }
+        let ratio = (log_prob - batch.old_log_probs[i]).exp();
+        let advantage = batch.advantages[i];
+        let unclipped = -advantage * ratio;
+        let clipped = -advantage * ratio.clamp(1.0 - eps, 1.0 + eps);
+        terms.surrogate += unclipped.max(clipped) as f64;
+        terms.kl += kl as f64;
+        if (ratio - 1.0).abs() > eps {
+            terms.clip_fraction += 1.0;
+        }
+        // d(surrogate)/d(log pi): the unclipped branch carries the gradient; the clipped one is flat.
+        let d_log_prob = if unclipped >= clipped { -advantage * ratio * inv_n } else { 0.0 };
+        for j in 0..a_size {
+            let diff = action[j] - mu[j];
+            d_mean[i * a_size + j] = d_log_prob * diff * inv_var[j];
+            log_std_grads[j] += d_log_prob * (diff * diff * inv_var[j] - 1.0);
+        }
+    }
+    // Entropy of a diagonal Gaussian: sum_j (log sigma_j + 1/2 + ln(2 pi)/2), the same for every sample.
+    let entropy = log_std_sum + a_size as f32 * (0.5 + HALF_LN_2PI);
+    for g in log_std_grads.iter_mut() {
+        *g -= config.entropy_coef;
+    }
+    policy.actor.backward(workspace, d_mean, actor_grads, threads);
+    let n = n as f64;
+    terms.surrogate /= n;
+    terms.kl /= n;
+    terms.clip_fraction /= n;
+    terms.entropy = entropy as f64;
+    terms
+}
+
+/// The (clipped) value loss and its gradient for the critic, scaled by the value-loss coefficient.
+fn value_loss(
+    policy: &ActorCritic,
+    config: &PpoConfig,
+    batch: &Minibatch,
+    workspace: &mut Workspace,
+    d_value: &mut Vec<f32>,
+    critic_grads: &mut [f32],
+    threads: usize,
+) -> f64 {
+    let n = batch.size;
+    let (inv_n, eps) = (1.0 / n as f32, config.clip);
+    let values = policy.critic.forward(&batch.observations, n, workspace, threads);
+    d_value.resize(n, 0.0);
+    let mut total = 0.0f64;
+    for i in 0..n {
+        let (v, target, old) = (values[i], batch.returns[i], batch.old_values[i]);
+        let error = v - target;
+        let (loss, d) = if config.clipped_value_loss {
+            let clipped = old + (v - old).clamp(-eps, eps);
+            let clipped_error = clipped - target;
+            if error * error >= clipped_error * clipped_error {
+                (error * error, 2.0 * error)
+            } else {
+                let inside = ((v - old).abs() < eps) as u8 as f32;
+                (clipped_error * clipped_error, 2.0 * clipped_error * inside)
+            }
+        } else {
+            (error * error, 2.0 * error)
+        };
+        total += loss as f64;
+        d_value[i] = config.value_loss_coef * d * inv_n;
+    }
+    policy.critic.backward(workspace, d_value, critic_grads, threads);
+    total / n as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A small policy and a minibatch whose ratios spread over both sides of the clip range.
+    fn setup(clipped_value_loss: bool) -> (ActorCritic, PpoConfig, Minibatch) {
+        let config = PpoConfig {
+            actor_hidden: vec![8, 6],
+            critic_hidden: vec![7],
+            clipped_value_loss,
+            entropy_coef: 0.05,
+            value_loss_coef: 0.7,
+            init_noise_std: 0.6,
+            ..PpoConfig::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut policy = ActorCritic::new(5, 3, &config, &mut rng);
+        // A larger output layer than the default 0.01 gain, so the actor's gradients are not tiny.
+        for p in policy.actor.params_mut() {
+            *p *= 1.0 + rng.random_range(0.0..3.0f32);
+        }
+        let n = 16;
+        let observations: Vec<f32> = (0..n * 5).map(|_| rng.random_range(-2.0..2.0)).collect();
+        let mut scratch = Workspace::default();
+        let means = policy.actor.forward(&observations, n, &mut scratch, 1).to_vec();
+        let mut critic_ws = Workspace::default();
+        let values = policy.critic.forward(&observations, n, &mut critic_ws, 1).to_vec();
+        let std = 0.6f32;
+        let actions: Vec<f32> = means.iter().map(|m| m + std * rng.random_range(-1.5..1.5)).collect();
+        let log_prob = |i: usize| -> f32 {
+            (0..3).map(|j| -0.5 * ((actions[i * 3 + j] - means[i * 3 + j]) / std).powi(2) - std.ln() - HALF_LN_2PI).sum()
+        };
+        let old_log_probs: Vec<f32> = (0..n).map(|i| log_prob(i) + rng.random_range(-0.5..0.5)).collect();
+        let old_means: Vec<f32> = means.iter().map(|m| m + rng.random_range(-0.2..0.2)).collect();
+        let old_values: Vec<f32> = values.iter().map(|v| v + rng.random_range(-0.5..0.5)).collect();
+        let batch = Minibatch {
+            size: n,
+            observations,
+            actions,
+            old_log_probs,
+            old_means,
+            old_log_std: vec![0.7f32.ln(); 3],
+            old_values,
+            advantages: (0..n).map(|_| rng.random_range(-2.0..2.0)).collect(),
+            returns: (0..n).map(|_| rng.random_range(-1.0..1.0)).collect(),
+        };
+        (policy, config, batch)
+    }
+
+    fn loss(policy: &ActorCritic, config: &PpoConfig, batch: &Minibatch) -> f64 {
+        let mut grads = Gradients::zeros(policy);
+        loss_and_gradients(policy, config, batch, &mut LossScratch::default(), &mut grads, 1).total
+    }
+
+    fn param_mut<'a>(policy: &'a mut ActorCritic, which: &str, i: usize) -> &'a mut f32 {
+        if which == "actor" { &mut policy.actor.params_mut()[i] } else { &mut policy.critic.params_mut()[i] }
+    }
+
+    /// Central differences, relative error per tensor, as for the MLP.
+    fn check(clipped_value_loss: bool) {
+        let (mut policy, config, batch) = setup(clipped_value_loss);
+        let mut grads = Gradients::zeros(&policy);
+        let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(terms.clip_fraction > 0.1 && terms.clip_fraction < 0.9, "both sides of the clip: {}", terms.clip_fraction);
+        let eps = 2e-3f32;
+        let compare = |name: &str, analytic: &[f32], numeric: &[f64]| {
+            let worst = analytic
+                .iter()
+                .zip(numeric)
+                .map(|(&a, &n)| (n - a as f64).abs() / (2e-3 + n.abs().max((a as f64).abs())))
+                .fold(0.0, f64::max);
+            assert!(worst < 3e-2, "{name} (clipped value loss {clipped_value_loss}): worst relative error {worst:.2e}");
+        };
+        let mut numeric = Vec::new();
+        for i in 0..policy.log_std.len() {
+            let original = policy.log_std[i];
+            policy.log_std[i] = original + eps;
+            let up = loss(&policy, &config, &batch);
+            policy.log_std[i] = original - eps;
+            let down = loss(&policy, &config, &batch);
+            policy.log_std[i] = original;
+            numeric.push((up - down) / (2.0 * eps as f64));
+        }
+        compare("log_std", &grads.log_std, &numeric);
+        for which in ["actor", "critic"] {
+            let tensors = if which == "actor" { policy.actor.tensors().to_vec() } else { policy.critic.tensors().to_vec() };
+            for tensor in tensors {
+                let mut numeric = Vec::new();
+                for i in tensor.range.clone() {
+                    let original = *param_mut(&mut policy, which, i);
+                    *param_mut(&mut policy, which, i) = original + eps;
+                    let up = loss(&policy, &config, &batch);
+                    *param_mut(&mut policy, which, i) = original - eps;
+                    let down = loss(&policy, &config, &batch);
+                    *param_mut(&mut policy, which, i) = original;
+                    numeric.push((up - down) / (2.0 * eps as f64));
+                }
+                let analytic = if which == "actor" { &grads.actor[tensor.range.clone()] } else { &grads.critic[tensor.range.clone()] };
+                compare(&format!("{which}.{}", tensor.name), analytic, &numeric);
+            }
+        }
+    }
+
+    #[test]
+    fn ppo_loss_gradients_match_finite_differences() {
+        check(true);
+        check(false);
+    }
+
+    #[test]
+    fn two_threads_give_the_same_loss_and_gradients_as_one() {
+        let (policy, config, batch) = setup(true);
+        let (mut one, mut two) = (Gradients::zeros(&policy), Gradients::zeros(&policy));
+        let a = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut one, 1);
+        let b = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut two, 2);
+        assert_eq!(a, b);
+        assert_eq!(one, two);
+    }
+
+    #[test]
+    fn a_zero_advantage_batch_only_moves_the_value_and_the_entropy() {
+        let (policy, config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        let mut grads = Gradients::zeros(&policy);
+        loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(grads.actor.iter().all(|&g| g == 0.0));
+        assert!(grads.log_std.iter().all(|&g| (g + config.entropy_coef).abs() < 1e-7), "entropy pushes sigma up");
+        assert!(grads.critic.iter().any(|&g| g != 0.0));
+    }
+
+    #[test]
+    fn a_positive_advantage_raises_the_probability_of_its_action() {
+        let (mut policy, mut config, mut batch) = setup(false);
+        config.entropy_coef = 0.0;
+        config.value_loss_coef = 0.0;
+        batch.advantages.iter_mut().for_each(|a| *a = 1.0);
+        let mut grads = Gradients::zeros(&policy);
+        let before = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        for (p, g) in policy.actor.params_mut().iter_mut().zip(&grads.actor) {
+            *p -= 1e-3 * g;
+        }
+        for (p, g) in policy.log_std.iter_mut().zip(&grads.log_std) {
+            *p -= 1e-3 * g;
+        }
+        let after = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        assert!(after.surrogate < before.surrogate, "{} -> {}", before.surrogate, after.surrogate);
+    }
+}
