@@ -234,8 +234,14 @@ fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize, mut record: Op
             }
         }
         if let Some(record) = record.as_deref_mut() {
-            let mut observation = vec![0.0f32; env.observation_layout().size()];
-            env.observe(&mut observation);
+            let observation = match &flying {
+                Flying::Policy { observation, .. } => observation.clone(),
+                Flying::Scripted { .. } => {
+                    let mut observation = vec![0.0f32; env.observation_layout().size()];
+                    env.observe(&mut observation);
+                    observation
+                }
+            };
             record.observations.push(observation);
             record.actions.push(action.clone());
         }

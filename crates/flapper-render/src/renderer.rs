@@ -62,6 +62,8 @@ pub struct FlightRenderer {
     data: MjData<Box<MjModel>>,
     renderer: MjRenderer,
     base_qpos: usize,
+    /// The five joints' ids and qpos addresses in the render model, order q1..q5.
+    joint_ids: [usize; N_ACTUATED_JOINTS],
     joint_qpos: [usize; N_ACTUATED_JOINTS],
     width: usize,
     height: usize,
@@ -77,15 +79,13 @@ impl FlightRenderer {
         }
         let text = render_model_mjcf(robot.mjcf()).ok_or_else(|| RenderError::Model("no <mujoco> element".into()))?;
         let model = MjModel::from_xml_string(&text).map_err(|e| RenderError::Model(e.to_string()))?;
-        let qpos_of = |name: &str| -> Result<usize, RenderError> {
-            let id = model.name_to_id(MjtObjBase::mjOBJ_JOINT, name).ok_or_else(|| RenderError::Model(format!("no joint '{name}'")))?;
-            Ok(model.jnt_qposadr()[id] as usize)
-        };
-        let base_qpos = qpos_of(flapper_sim::BASE_JOINT)?;
-        let mut joint_qpos = [0; N_ACTUATED_JOINTS];
+        let id_of = |name: &str| model.name_to_id(MjtObjBase::mjOBJ_JOINT, name).ok_or_else(|| RenderError::Model(format!("no joint '{name}'")));
+        let base_qpos = model.jnt_qposadr()[id_of(flapper_sim::BASE_JOINT)?] as usize;
+        let mut joint_ids = [0; N_ACTUATED_JOINTS];
         for joint in ActuatedJoint::ALL {
-            joint_qpos[joint.index()] = qpos_of(joint.name())?;
+            joint_ids[joint.index()] = id_of(joint.name())?;
         }
+        let joint_qpos = joint_ids.map(|id| model.jnt_qposadr()[id] as usize);
         let renderer = MjRenderer::builder()
             .width(width as u32)
             .height(height as u32)
@@ -96,7 +96,7 @@ impl FlightRenderer {
             .build(&model)
             .map_err(|e| RenderError::NoOpenGl(format!("{e:?}")))?;
         let data = MjData::try_new(Box::new(model)).map_err(|e| RenderError::Model(e.to_string()))?;
-        Ok(Self { data, renderer, base_qpos, joint_qpos, width, height, markers: Vec::new(), annotated: false })
+        Ok(Self { data, renderer, base_qpos, joint_ids, joint_qpos, width, height, markers: Vec::new(), annotated: false })
     }
 
     pub fn size(&self) -> (usize, usize) {
@@ -159,9 +159,8 @@ impl FlightRenderer {
             }
             // Each joint: a line from its anchor to a label placed clear of the others.
             let (anchors, axes) = (self.data.xanchor(), self.data.xaxis());
-            let model = self.data.model();
             for joint in ActuatedJoint::ALL {
-                let id = model.name_to_id(MjtObjBase::mjOBJ_JOINT, joint.name()).expect("looked up in new");
+                let id = self.joint_ids[joint.index()];
                 let (a, axis) = (anchors[id], axes[id]);
                 let ends = [0.09, -0.09].map(|h| [a[0] + h * axis[0], a[1] + h * axis[1], a[2] + h * axis[2]]);
                 add_connector(scene, MjtGeom::mjGEOM_ARROW, 0.006, ends[1], ends[0], [0.0, 0.75, 0.9, 1.0], "")?;

@@ -30,12 +30,17 @@ fn create(dir: &Path) -> Result<(), ReportError> {
     std::fs::create_dir_all(dir).map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })
 }
 
+/// The reference `name` (a name or a CSV file) sampled at the task's control period, and that period.
+fn resolve_reference(robot: &RobotModel, task: &TaskConfig, name: &str) -> Result<(Arc<Reference>, f64), ReportError> {
+    let period_s = task.control_period_s(robot.timestep_s());
+    let reference = flapper_task::reference::resolve(name, period_s, task.observation.lookahead_steps)
+        .map_err(|e| ReportError::step(format!("reference {name}"), e))?;
+    Ok((Arc::new(reference), period_s))
+}
+
 /// `flapper eval` without the baseline: `summary.json` (the table's figures), plots of 3 episodes.
 pub fn tracking(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, settings: &ReportSettings, dir: &Path) -> Result<Tracked, ReportError> {
-    let period_s = task.control_period_s(robot.timestep_s());
-    let reference = Arc::new(
-        flapper_task::reference::resolve(name, period_s, task.observation.lookahead_steps).map_err(|e| ReportError::step(format!("reference {name}"), e))?,
-    );
+    let (reference, period_s) = resolve_reference(robot, task, name)?;
     let results = evaluate_tracking(robot, pilot, task, reference.clone(), settings.episodes, settings.seed)
         .map_err(|e| ReportError::step(format!("tracking on {name}"), e))?;
     let summary = TrackingSummary::of(&results, period_s, flapper_task::reference::named::manoeuvre_window_s(name));
@@ -84,10 +89,7 @@ pub fn modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, di
 /// `flapper robustness` on one reference: the fluid sweep at the paper's ranges, the winds, Table III
 /// at once and, with `envelope`, the level airspeed envelope.
 pub fn robustness(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, envelope: bool, settings: &ReportSettings, dir: &Path) -> Result<(), ReportError> {
-    let period_s = task.control_period_s(robot.timestep_s());
-    let reference = Arc::new(
-        flapper_task::reference::resolve(name, period_s, task.observation.lookahead_steps).map_err(|e| ReportError::step(format!("reference {name}"), e))?,
-    );
+    let (reference, _) = resolve_reference(robot, task, name)?;
     let mut sweeps = vec![Sweep::Fluid, Sweep::Wind, Sweep::TableIii];
     if envelope {
         sweeps.push(Sweep::Envelope);

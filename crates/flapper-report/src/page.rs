@@ -28,7 +28,12 @@ fn json(out: &Path, file: &str) -> Value {
 }
 
 fn fixed(v: &Value, decimals: usize) -> String {
-    v.as_f64().map_or("-".into(), |x| format!("{x:.decimals$}"))
+    scaled(v, 1.0, decimals)
+}
+
+/// `v` times `factor` (a unit change), or "-" when `v` is not a number.
+fn scaled(v: &Value, factor: f64, decimals: usize) -> String {
+    v.as_f64().map_or("-".into(), |x| format!("{:.decimals$}", x * factor))
 }
 
 fn polynomial(coefficients: &Value) -> String {
@@ -78,11 +83,11 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             Block::Text(format!(
                 "Fundamental frequency (energy fraction): flap {} Hz ({}%), wing pitch {} Hz ({}%), tail {} Hz ({}%); the paper: 5.3 Hz, 36.8-38.7%.",
                 fixed(&s["frequency_hz"][0], 2),
-                fixed(&Value::from(s["energy_fraction"][0].as_f64().unwrap_or(f64::NAN) * 100.0), 1),
+                scaled(&s["energy_fraction"][0], 100.0, 1),
                 fixed(&s["frequency_hz"][1], 2),
-                fixed(&Value::from(s["energy_fraction"][1].as_f64().unwrap_or(f64::NAN) * 100.0), 1),
+                scaled(&s["energy_fraction"][1], 100.0, 1),
                 fixed(&s["frequency_hz"][2], 2),
-                fixed(&Value::from(s["energy_fraction"][2].as_f64().unwrap_or(f64::NAN) * 100.0), 1),
+                scaled(&s["energy_fraction"][2], 100.0, 1),
             )),
         ],
     });
@@ -221,7 +226,7 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
         vec!["joint damping".into(), interval("joint_damping_scale"), "x[0.9, 1.1]".into()],
         vec!["link mass".into(), interval("link_mass_scale"), "x[0.9, 1.1]".into()],
         vec!["link inertia".into(), interval("link_inertia_scale"), "x[0.9, 1.1]".into()],
-        vec!["centre of mass".into(), format!("+-{} mm", fixed(&Value::from(r["link_com_offset_m"].as_f64().unwrap_or(f64::NAN) * 1000.0), 0)), "+-50 mm (ours: README, Randomization)".into()],
+        vec!["centre of mass".into(), format!("+-{} mm", scaled(&r["link_com_offset_m"], 1000.0, 0)), "+-50 mm (ours: README, Randomization)".into()],
         vec!["fluid coefficients (each)".into(), interval("fluid_coefficient_scale"), "x[0.7, 1.3]".into()],
         vec!["added mass".into(), interval("added_mass_scale"), "x[0.9, 1.1]".into()],
         vec!["added inertia".into(), interval("added_inertia_scale"), "x[0.9, 1.1]".into()],
@@ -258,8 +263,8 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             s["policy"].as_str().unwrap_or("").to_owned(),
             format!("{}", s["iterations"]),
             format!("{}", s["runs"]),
-            fixed(&Value::from(s["env_steps"].as_f64().unwrap_or(f64::NAN) / 1e6), 2),
-            fixed(&Value::from(s["wall_time_s"].as_f64().unwrap_or(f64::NAN) / 60.0), 1),
+            scaled(&s["env_steps"], 1.0 / 1e6, 2),
+            scaled(&s["wall_time_s"], 1.0 / 60.0, 1),
         ]);
         if let Some(file) = s["learning_curves"].as_str() {
             curves.push(figure(&format!("Learning curves of stage {}.", s["stage"]), &format!("training/{file}")));
@@ -268,8 +273,8 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
     let mut blocks = vec![Block::Table(["stage", "policy", "iterations", "runs", "env steps (M)", "wall time (min)"].map(String::from).to_vec(), training_rows)];
     blocks.push(Block::Text(format!(
         "In all: {} M steps in {} h ({} steps/s); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
-        fixed(&Value::from(training["total_env_steps"].as_f64().unwrap_or(f64::NAN) / 1e6), 1),
-        fixed(&Value::from(training["total_wall_time_s"].as_f64().unwrap_or(f64::NAN) / 3600.0), 2),
+        scaled(&training["total_env_steps"], 1.0 / 1e6, 1),
+        scaled(&training["total_wall_time_s"], 1.0 / 3600.0, 2),
         fixed(&training["steps_per_s"], 0)
     )));
     blocks.extend(curves);

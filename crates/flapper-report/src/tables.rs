@@ -1,7 +1,7 @@
 //! The tables the page shows besides the experiments: training of every stage (steps, wall time,
 //! learning curves), the model's Table II and the randomization of Table III as used.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use flapper_sim::{FluidCoefficients, LIFTING_SURFACE_GEOMS, RobotModel};
 use flapper_task::TaskConfig;
@@ -11,29 +11,29 @@ use crate::{ReportError, write_file};
 
 /// `training/training.json` (per stage: iterations, environment steps, wall time, from each policy's
 /// sidecar) and `training/stageK_learning_curves.svg` copied from each policy's folder.
-pub fn training(stage_policies: &[std::path::PathBuf], dir: &Path) -> Result<(), ReportError> {
+pub fn training(stage_policies: &[PathBuf], dir: &Path) -> Result<(), ReportError> {
     let mut stages = Vec::new();
     for (k, policy) in stage_policies.iter().enumerate() {
         let sidecar = policy.with_file_name(format!("{}.json", policy.file_name().map_or("".into(), |n| n.to_string_lossy().into_owned())));
-        let Ok(text) = std::fs::read_to_string(&sidecar) else { continue };
-        let info: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| ReportError::step(format!("reading '{}'", sidecar.display()), e))?;
+        if !sidecar.exists() {
+            continue;
+        }
         // A stage trained in several runs keeps the earlier runs' sidecars beside the policy
         // (`earlier_run*.safetensors.json`): their iterations, steps and time count too.
-        let (mut iterations, mut env_steps, mut wall_time_s) =
-            (info["iteration"].as_f64().unwrap_or(0.0), info["env_steps"].as_f64().unwrap_or(0.0), info["wall_time_s"].as_f64().unwrap_or(0.0));
-        let mut runs = 1;
         let folder = policy.parent().unwrap_or(Path::new("."));
-        let mut earlier: Vec<_> = std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
-        earlier.retain(|p: &std::path::PathBuf| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")));
-        earlier.sort();
-        for path in earlier {
-            let text = std::fs::read_to_string(&path).map_err(|e| ReportError::step(format!("reading '{}'", path.display()), e))?;
-            let run: serde_json::Value = serde_json::from_str(&text).map_err(|e| ReportError::step(format!("reading '{}'", path.display()), e))?;
+        let mut sidecars: Vec<PathBuf> = std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+        sidecars.retain(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")));
+        sidecars.sort();
+        sidecars.insert(0, sidecar);
+        let runs = sidecars.len();
+        let (mut iterations, mut env_steps, mut wall_time_s) = (0.0, 0.0, 0.0);
+        for path in &sidecars {
+            let read = |e: &dyn std::fmt::Display| ReportError::step(format!("reading '{}'", path.display()), e);
+            let text = std::fs::read_to_string(path).map_err(|e| read(&e))?;
+            let run: serde_json::Value = serde_json::from_str(&text).map_err(|e| read(&e))?;
             iterations += run["iteration"].as_f64().unwrap_or(0.0);
             env_steps += run["env_steps"].as_f64().unwrap_or(0.0);
             wall_time_s += run["wall_time_s"].as_f64().unwrap_or(0.0);
-            runs += 1;
         }
         let curves = policy.with_file_name("learning_curves.svg");
         let copied = format!("stage{}_learning_curves.svg", k + 1);
