@@ -12,18 +12,21 @@ use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 use flapper_eval::load_flight_policy;
 
-use crate::load_reference;
+/// `flapper eval`'s arguments, as parsed.
+pub struct EvalArgs<'a> {
+    pub policy: Option<&'a Path>,
+    pub reference: &'a str,
+    pub episodes: usize,
+    pub seed: u64,
+    pub out: &'a Path,
+    /// Fly the scripted gait too.
+    pub baseline: bool,
+    /// Write episode 0's observations and actions per pilot.
+    pub observations: bool,
+}
 
-pub fn eval_command(
-    robot: &RobotModel,
-    policy_path: Option<&Path>,
-    reference: &str,
-    episodes: usize,
-    seed: u64,
-    out: &Path,
-    baseline: bool,
-    observations: bool,
-) -> Result<()> {
+pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
+    let EvalArgs { policy: policy_path, reference, episodes, seed, out, baseline, observations } = args;
     if episodes == 0 || episodes > 100_000 {
         bail!("--episodes must be 1 to 100000, got {episodes}");
     }
@@ -41,7 +44,7 @@ pub fn eval_command(
     let lookahead = pilots[0].2.observation.lookahead_steps;
     // Every pilot's task steps at the same rate: the control substeps are the paper's for both.
     let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
-    let reference = Arc::new(load_reference(reference, dt_s, lookahead)?);
+    let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
     crate::output_dir::prepare_output_dir(out)?;
     println!("{}: {:.1} s, {} episodes from randomized starts (seed {seed})", reference.name(), reference.duration_s(), episodes);
     let mut summaries = Vec::new();

@@ -1,19 +1,22 @@
 //! `flapper`: the command line. It parses, validates and dispatches; the work happens in the
 //! library crates. Errors reach the user as one line and a non-zero exit code.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand, ValueEnum};
-use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots};
+use anyhow::Result;
+use clap::{Parser, Subcommand};
 use flapper_sim::RobotModel;
 
+mod bench;
 mod eval;
+mod export_policy;
+mod fly;
 mod modes;
 mod output_dir;
 mod phase;
 mod progress;
+mod reference;
 mod report;
 mod robustness;
 mod sysid;
@@ -34,8 +37,8 @@ enum Command {
     /// Fly a controller and write the flight as CSV and SVG plots.
     Fly {
         /// Which controller flies the robot.
-        #[arg(long, value_enum, default_value_t = ControllerKind::Scripted)]
-        controller: ControllerKind,
+        #[arg(long, value_enum, default_value_t = fly::ControllerKind::Scripted)]
+        controller: fly::ControllerKind,
         /// Flight duration in seconds.
         #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
         seconds: f64,
@@ -248,7 +251,8 @@ enum Command {
         #[arg(long, default_value = "run/pendulum")]
         out: PathBuf,
     },
-    /// Time MuJoCo steps and 20 ms control steps of this model on one thread.
+    /// Time this model's MuJoCo steps and 20 ms control steps on one thread, the vectorized
+    /// environments, the PPO update and PPO training end to end (medians over repeats).
     Bench {
         /// Number of timed blocks (the median over blocks is reported).
         #[arg(long, default_value_t = 21)]
@@ -268,13 +272,6 @@ enum Command {
     },
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum ControllerKind {
-    /// The scripted 5.3 Hz flapping gait with pitch, roll and altitude feedback.
-    Scripted,
-    /// Wings flat, tail fixed (--tail-deg): an unpowered glide.
-    Glide,
-}
 
 fn main() -> ExitCode {
     // MuJoCo's messages go through `log` (silent by default) instead of stdout and MUJOCO_LOG.TXT.
@@ -315,22 +312,28 @@ fn run(cli: Cli) -> Result<()> {
         None => RobotModel::flapper()?,
     };
     match cli.command {
-        Command::Fly { controller, seconds, out, tail_deg } => fly_command(&robot, controller, seconds, tail_deg, &out),
-        Command::Reference { reference, list, out } => {
-            let dt_s = flapper_task::TaskConfig::default().control_period_s(robot.timestep_s());
-            reference_command(reference.as_deref(), list, &out, dt_s)
-        }
+        Command::Fly { controller, seconds, out, tail_deg } => fly::fly_command(&robot, controller, seconds, tail_deg, &out),
+        Command::Reference { reference, list, out } => reference::reference_command(&robot, reference.as_deref(), list, &out),
         Command::Bench { blocks, steps, envs, threads, train_iterations } => {
-            bench_command(&robot, blocks, steps, envs, threads, train_iterations)
+            bench::bench_command(&robot, blocks, steps, envs, threads, train_iterations)
         }
         Command::Train { config, stage, out, resume, init_from, iterations, seed, envs } => {
             let overrides = train::Overrides { iterations, seed, envs };
             train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)
         }
         Command::Eval { policy, reference, episodes, seed, out, no_baseline, observations } => {
-            eval::eval_command(&robot, policy.as_deref(), &reference, episodes, seed, &out, !no_baseline, observations)
+            let args = eval::EvalArgs {
+                policy: policy.as_deref(),
+                reference: &reference,
+                episodes,
+                seed,
+                out: &out,
+                baseline: !no_baseline,
+                observations,
+            };
+            eval::eval_command(&robot, args)
         }
-        Command::ExportPolicy { checkpoint, out } => export_policy(&checkpoint, &out),
+        Command::ExportPolicy { checkpoint, out } => export_policy::export_policy_command(&checkpoint, &out),
         Command::Phase { policy, speed_mps, out } => phase::phase_command(&robot, &policy, speed_mps, &out),
         Command::Modes { policy, out } => modes::modes_command(&robot, &policy, &out),
         Command::Robustness { policy, reference, episodes, seed, sweeps, ranges, out } => robustness::robustness_command(
@@ -347,135 +350,4 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render { policy, reference, seed, out } => report::render_command(&robot, &policy, &reference, seed, &out),
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
-}
-
-fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg: f64, out: &Path) -> Result<()> {
-    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
-        bail!("--seconds must be between 0 and 3600, got {seconds}");
-    }
-    if !(-40.0..=40.0).contains(&tail_deg) {
-        bail!("--tail-deg must be within the tail's range of -40..40 deg, got {tail_deg}");
-    }
-    let (mut controller, spec, name): (Box<dyn Controller>, FlightSpec, &str) = match kind {
-        ControllerKind::Scripted => (
-            Box::new(ScriptedGait::new(ScriptedGaitConfig::default())),
-            FlightSpec::cruise_launch(seconds, ScriptedGaitConfig::default().body_pitch_deg),
-            "scripted gait",
-        ),
-        ControllerKind::Glide => {
-            (Box::new(GlideController { tail_rad: tail_deg.to_radians() }), FlightSpec::cruise_launch(seconds, 7.5), "glide")
-        }
-    };
-    crate::output_dir::prepare_output_dir(out)?;
-    let log = fly(robot, controller.as_mut(), &spec)?;
-    let csv = out.join("flight.csv");
-    log.write_csv(&csv)?;
-    let plots = write_flight_plots(&log, out, name)?;
-    let s = log.summary();
-    println!("{name}: {:.2} s flown{}", s.duration_s, log.fault().map_or(String::new(), |f| format!(", stopped: {f}")));
-    println!("  altitude change      {:+.3} m (largest deviation {:.3} m)", s.altitude_change_m, s.max_altitude_deviation_m);
-    println!("  distance             {:.1} m, mean speed {:.2} m/s, mean airspeed {:.2} m/s", s.horizontal_distance_m, s.mean_speed_mps, s.mean_airspeed_mps);
-    if s.altitude_change_m < -0.01 {
-        println!("  glide ratio          {:.2}", s.horizontal_distance_m / -s.altitude_change_m);
-    }
-    println!("  mechanical power     {:.2} W net, {:.2} W absolute", s.mean_mechanical_power_w, s.mean_absolute_power_w);
-    println!("wrote {}", csv.display());
-    for plot in plots {
-        println!("wrote {}", plot.display());
-    }
-    Ok(())
-}
-
-fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize, train_iterations: usize) -> Result<()> {
-    if blocks == 0 || steps < 5 || blocks > 1000 || steps > 10_000_000 {
-        bail!("--blocks must be 1 to 1000 and --steps 5 to 10000000 (got {blocks} and {steps})");
-    }
-    if envs > 65_536 || threads > 1024 || train_iterations > 100_000 {
-        bail!("--envs must be at most 65536, --threads at most 1024 and --train-iterations at most 100000 (got {envs}, {threads} and {train_iterations})");
-    }
-    let t = flapper_sim::benchmark::time_steps(robot, blocks, steps)?;
-    println!("model {} on one thread, {} blocks of {} steps (flapping at 3.8 m/s):", robot.origin(), t.blocks, t.steps_per_block);
-    println!("  mj_step        median {:.2} us  (min {:.2}, max {:.2})", t.median_us_per_mj_step, t.min_us_per_mj_step, t.max_us_per_mj_step);
-    println!("  control step   median {:.2} us  (5 substeps = 20 ms simulated)", t.median_us_per_control_step);
-    println!("  real-time factor {:.0}x", 20_000.0 / t.median_us_per_control_step);
-    if envs > 0 {
-        let env_blocks = blocks.clamp(1, 7);
-        let v = flapper_task::benchmark::time_vec_env(robot, envs, threads, env_blocks, 50)?;
-        let raw = v.threads as f64 * 1e6 / t.median_us_per_control_step;
-        println!("{} environments on {} threads, {} blocks of 50 steps (observation, reward, resets included):", v.envs, v.threads, v.blocks);
-        println!("  environment steps/s  median {:.0}  (min {:.0}, max {:.0})", v.median_steps_per_s, v.min_steps_per_s, v.max_steps_per_s);
-        println!("  raw MuJoCo bound     {raw:.0} control steps/s ({} threads x one-thread control step)", v.threads);
-        println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
-    }
-    let threads = if threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { threads };
-    // The paper's network update: its observation and its minibatch (256 envs x 24 steps / 4).
-    let observation_size = flapper_task::observation::ObservationLayout::of(&flapper_task::TaskConfig::default().observation).size();
-    let ppo = flapper_ppo::PpoConfig::default();
-    let minibatch = flapper_ppo::RunnerConfig::default().envs * ppo.steps_per_env / ppo.minibatches;
-    let n = flapper_ppo::benchmark::time_actor_critic_update(observation_size, minibatch, threads, blocks.clamp(3, 21));
-    println!("actor + critic MLPs (540 -> 256, 128, 64 -> 5 | 1), minibatch {}, {} threads:", n.minibatch, n.threads);
-    println!("  forward + backward + Adam  median {:.0} samples/s over {} repeats", n.median_samples_per_s, n.repeats);
-    if train_iterations > 0 {
-        let envs = if envs > 0 { envs } else { 256 };
-        let t = flapper_train::benchmark::time_training(robot, envs, threads, train_iterations)?;
-        println!("PPO training end to end, stage 1 from scratch, {} environments x 24 steps, {} threads, {} iterations:", t.envs, t.threads, t.iterations);
-        println!("  environment steps/s  median {:.0}  (paper: 30 M steps in about 5 h on 8 cores = 1.7 k/s)", t.median_steps_per_s);
-        println!(
-            "  time split           environments {:.0}%, inference {:.0}%, update {:.0}%",
-            100.0 * t.env_fraction,
-            100.0 * t.inference_fraction,
-            100.0 * t.update_fraction
-        );
-    }
-    Ok(())
-}
-
-fn export_policy(checkpoint: &Path, out: &Path) -> Result<()> {
-    if out.exists() {
-        bail!("'{}' exists; choose another --out (nothing is overwritten)", out.display());
-    }
-    let loaded = flapper_ppo::checkpoint::load(checkpoint)?;
-    let info = flapper_ppo::checkpoint::CheckpointInfo { kind: "policy".into(), rng: None, ..loaded.info };
-    flapper_ppo::checkpoint::save(out, &info, &loaded.policy, None, None)?;
-    println!("wrote {} (iteration {}, {} environment steps)", out.display(), info.iteration, info.env_steps);
-    Ok(())
-}
-
-/// A named reference (starting at 10 m altitude) or a CSV file, at `dt_s`, with `lookahead_steps` of
-/// straight continuation after its end (what the policy sees ahead at the last step).
-pub fn load_reference(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<flapper_task::reference::Reference> {
-    Ok(flapper_task::reference::resolve(reference, dt_s, lookahead_steps)?)
-}
-
-fn reference_command(reference: Option<&str>, list: bool, out: &Path, dt_s: f64) -> Result<()> {
-    use flapper_task::reference::named::NAMED_REFERENCES;
-    if list {
-        for (name, what) in NAMED_REFERENCES {
-            println!("{name:<20} {what}");
-        }
-        return Ok(());
-    }
-    let Some(reference) = reference else { bail!("give a reference name or CSV file (or --list)") };
-    let loaded = load_reference(reference, dt_s, 0)?;
-    crate::output_dir::prepare_output_dir(out)?;
-    let csv_path = out.join("reference.csv");
-    let text = flapper_task::reference::csv_file::reference_csv_text(loaded.points(), dt_s);
-    flapper_plot::write_atomically(&csv_path, text.as_bytes()).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
-    let plot = out.join("reference.svg");
-    flapper_eval::write_path_views(loaded.points(), loaded.name(), &plot)?;
-    let speeds: Vec<f64> = (0..loaded.len() - 1).map(|k| loaded.speed(k)).collect();
-    let (z_min, z_max) = loaded.points().iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.z), hi.max(p.z)));
-    println!(
-        "{}: {:.2} s, {} points at 50 Hz, speed {:.2}-{:.2} m/s, altitude {:.2}-{:.2} m",
-        loaded.name(),
-        loaded.duration_s(),
-        loaded.len(),
-        speeds.iter().copied().fold(f64::MAX, f64::min),
-        speeds.iter().copied().fold(f64::MIN, f64::max),
-        z_min,
-        z_max
-    );
-    println!("wrote {}", csv_path.display());
-    println!("wrote {}", plot.display());
-    Ok(())
 }

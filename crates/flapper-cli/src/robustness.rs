@@ -10,7 +10,6 @@ use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
 use flapper_eval::load_flight_policy;
 
-use crate::load_reference;
 
 pub struct RobustnessArgs<'a> {
     pub policy: &'a Path,
@@ -45,7 +44,7 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         bail!("--ranges: give 1 to 100 ranges, got {}", ranges.len());
     }
     let (policy, task) = load_flight_policy(args.policy)?;
-    let reference = Arc::new(load_reference(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
+    let reference = Arc::new(flapper_task::reference::resolve(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
     crate::output_dir::prepare_output_dir(args.out)?;
     let settings = RobustnessSettings {
         sweeps,

@@ -156,6 +156,19 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
     assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap().lines().count(), 4);
 
+    // A checkpoint exported as a policy flies like one; an existing target is refused and kept.
+    let exported = dir.join("iter2.safetensors");
+    let checkpoint = run.join("checkpoints/iter_000002.safetensors");
+    let output = flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("iteration 2"));
+    let sidecar = std::fs::read_to_string(dir.join("iter2.safetensors.json")).unwrap();
+    assert!(sidecar.contains("\"kind\": \"policy\""), "{sidecar}");
+    let before = std::fs::read(&exported).unwrap();
+    let again = flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
+    assert_one_line_error(&again, "exists");
+    assert_eq!(std::fs::read(&exported).unwrap(), before);
+
     let eval_out = dir.join("eval");
     let policy = run.join("policy.safetensors");
     let output = flapper(&[

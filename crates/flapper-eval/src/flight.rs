@@ -1,7 +1,7 @@
 //! Flying a controller through the control loop and recording every control step.
 
 use flapper_sim::{InitialState, ModelError, RobotModel, Simulator, Vec3, quat_from_euler};
-use flapper_task::{ControlLoop, ControlLoopConfig};
+use flapper_task::{ControlConfig, ControlLoop};
 
 use crate::controller::{Controller, FlightState};
 use crate::flight_log::{FlightLog, FlightRow};
@@ -11,7 +11,7 @@ use crate::flight_log::{FlightLog, FlightRow};
 pub struct FlightSpec {
     pub seconds: f64,
     pub initial: InitialState,
-    pub control: ControlLoopConfig,
+    pub control: ControlConfig,
 }
 
 impl FlightSpec {
@@ -25,7 +25,7 @@ impl FlightSpec {
                 linear_velocity_mps: Vec3::new(flapper_sim::CRUISE_SPEED_MPS, 0.0, 0.0),
                 ..InitialState::default()
             },
-            control: ControlLoopConfig::default(),
+            control: ControlConfig::default(),
         }
     }
 }

@@ -1,44 +1,76 @@
-//! Throughput of the network maths on the PPO workload: actor and critic MLPs (540 -> 256, 128, 64 ->
-//! 5 and -> 1), forward, backward and an Adam step per minibatch. Used by `flapper bench`.
+//! Throughput of the network update on the PPO workload, through the path training takes:
+//! [`Ppo::update`] over a full rollout of synthetic samples (minibatch gathering, the loss and its
+//! gradients with the actor's and the critic's halves side by side, gradient clipping, Adam and the
+//! adaptive learning rate). Used by `flapper bench`.
 
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::adam::Adam;
-use crate::mlp::{Activation, Mlp, Workspace};
+use crate::actor_critic::ActorCritic;
+use crate::config::PpoConfig;
+use crate::ppo::Ppo;
 
 #[derive(Debug, Clone)]
 pub struct NetworkThroughput {
     pub minibatch: usize,
     pub threads: usize,
-    /// Median over repeats of samples per second through actor and critic, forward + backward + Adam.
+    /// Median over repeats of samples per second through one gradient step of actor and critic
+    /// (forward, backward, Adam): epochs x rollout samples / the update's wall time.
     pub median_samples_per_s: f64,
     pub repeats: usize,
 }
 
-pub fn time_actor_critic_update(observation_size: usize, minibatch: usize, threads: usize, repeats: usize) -> NetworkThroughput {
+/// Times `repeats` updates of a learner with `config`'s networks and schedule over rollouts of `envs`
+/// environments (filled with random observations and rewards; the filling is not timed).
+pub fn time_ppo_update(
+    observation_size: usize,
+    action_size: usize,
+    envs: usize,
+    config: &PpoConfig,
+    threads: usize,
+    repeats: usize,
+) -> NetworkThroughput {
     let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let mut actor = Mlp::new(&[observation_size, 256, 128, 64, 5], Activation::Elu, 0.01, &mut rng);
-    let mut critic = Mlp::new(&[observation_size, 256, 128, 64, 1], Activation::Elu, 1.0, &mut rng);
-    let (mut actor_adam, mut critic_adam) = (Adam::new(actor.params().len(), 1e-3), Adam::new(critic.params().len(), 1e-3));
-    let (mut actor_grads, mut critic_grads) = (vec![0.0; actor.params().len()], vec![0.0; critic.params().len()]);
-    let input: Vec<f32> = (0..minibatch * observation_size).map(|_| rng.random_range(-1.0..1.0)).collect();
-    let (d_actor, d_critic) = (vec![1e-3f32; minibatch * 5], vec![1e-3f32; minibatch]);
-    let (mut actor_ws, mut critic_ws) = (Workspace::default(), Workspace::default());
+    let policy = ActorCritic::new(observation_size, action_size, config, &mut rng);
+    let mut ppo = Ppo::new(policy, config.clone(), envs, ChaCha8Rng::seed_from_u64(1), threads);
+    let mut observations = vec![0.0f32; envs * observation_size];
+    let mut actions = vec![0.0f32; envs * action_size];
+    let (no_end, mut rewards) = (vec![false; envs], vec![0.0f32; envs]);
+    let samples = config.epochs * config.steps_per_env * envs;
     let mut rates = Vec::with_capacity(repeats);
     for _ in 0..repeats.max(1) + 1 {
+        for _ in 0..config.steps_per_env {
+            observations.iter_mut().for_each(|x| *x = rng.random_range(-1.0..1.0));
+            rewards.iter_mut().for_each(|r| *r = rng.random_range(0.0..1.0));
+            ppo.act(&observations, &mut actions);
+            ppo.process_step(&rewards, &no_end, &no_end, &observations);
+        }
+        ppo.finish_rollout(&observations);
         let began = Instant::now();
-        actor.forward(&input, minibatch, &mut actor_ws, threads);
-        actor.backward(&mut actor_ws, &d_actor, &mut actor_grads, threads);
-        actor_adam.step(actor.params_mut(), &actor_grads);
-        critic.forward(&input, minibatch, &mut critic_ws, threads);
-        critic.backward(&mut critic_ws, &d_critic, &mut critic_grads, threads);
-        critic_adam.step(critic.params_mut(), &critic_grads);
-        rates.push(minibatch as f64 / began.elapsed().as_secs_f64());
+        ppo.update();
+        rates.push(samples as f64 / began.elapsed().as_secs_f64());
     }
     rates.remove(0); // warm-up: buffers allocated on the first pass
     rates.sort_by(f64::total_cmp);
-    NetworkThroughput { minibatch, threads, median_samples_per_s: rates[rates.len() / 2], repeats: rates.len() }
+    NetworkThroughput {
+        minibatch: config.steps_per_env * envs / config.minibatches,
+        threads,
+        median_samples_per_s: rates[rates.len() / 2],
+        repeats: rates.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_update_benchmark_counts_every_gradient_sample() {
+        let config = PpoConfig { actor_hidden: vec![8], critic_hidden: vec![8], ..PpoConfig::default() };
+        let t = time_ppo_update(6, 2, 16, &config, 1, 3);
+        assert_eq!((t.minibatch, t.threads, t.repeats), (16 * 24 / 4, 1, 3));
+        assert!(t.median_samples_per_s.is_finite() && t.median_samples_per_s > 0.0, "{t:?}");
+    }
 }

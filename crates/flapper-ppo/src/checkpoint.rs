@@ -37,6 +37,8 @@ pub enum CheckpointError {
     Format { path: PathBuf, message: String },
     #[error("'{path}' was trained for {found}, but this run has {expected}")]
     Layout { path: PathBuf, found: String, expected: String },
+    #[error("'{path}' exists; choose another name (nothing is overwritten)")]
+    Exists { path: PathBuf },
 }
 
 /// The learner's random stream, as ChaCha8 describes its position.
@@ -72,12 +74,22 @@ impl RngState {
     }
 }
 
+/// What a file can do: resume a run, or only fly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CheckpointKind {
+    /// Networks, optimizer, random streams and environments: resumes a run exactly.
+    Checkpoint,
+    /// Networks and normalizer only: flies, evaluates, starts a new run.
+    Policy,
+}
+
 /// The description stored in the file's metadata and in the `.json` beside it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CheckpointInfo {
     pub format_version: u32,
-    /// "checkpoint" (can resume a run) or "policy" (networks only).
-    pub kind: String,
+    /// Stored as "checkpoint" or "policy".
+    pub kind: CheckpointKind,
     /// Iterations completed.
     pub iteration: usize,
     pub env_steps: u64,
@@ -127,11 +139,11 @@ impl Checkpoint {
 }
 
 /// Describes `ppo` for a file of `kind`.
-pub fn describe(ppo: &Ppo, kind: &str, iteration: usize, env_steps: u64, wall_time_s: f64, config_toml: &str) -> CheckpointInfo {
+pub fn describe(ppo: &Ppo, kind: CheckpointKind, iteration: usize, env_steps: u64, wall_time_s: f64, config_toml: &str) -> CheckpointInfo {
     let policy = &ppo.policy;
     CheckpointInfo {
         format_version: FORMAT_VERSION,
-        kind: kind.to_owned(),
+        kind,
         iteration,
         env_steps,
         wall_time_s,
@@ -142,7 +154,7 @@ pub fn describe(ppo: &Ppo, kind: &str, iteration: usize, env_steps: u64, wall_ti
         activation: policy.activation(),
         learning_rate: ppo.learning_rate,
         adam_steps: ppo.optimizer.actor.steps,
-        rng: (kind == "checkpoint").then(|| RngState::capture(&ppo.rng)),
+        rng: (kind == CheckpointKind::Checkpoint).then(|| RngState::capture(&ppo.rng)),
         config_toml: config_toml.to_owned(),
     }
 }
@@ -209,6 +221,18 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError
     flapper_files::write_atomically(path, bytes).map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
 }
 
+/// Writes the networks of the checkpoint (or policy) at `from` as a policy file at `to`, which must
+/// not exist: the shipped `policy.safetensors` of a chosen iteration. Returns its description.
+pub fn export_policy(from: &Path, to: &Path) -> Result<CheckpointInfo, CheckpointError> {
+    if to.exists() {
+        return Err(CheckpointError::Exists { path: to.to_owned() });
+    }
+    let loaded = load(from)?;
+    let info = CheckpointInfo { kind: CheckpointKind::Policy, rng: None, ..loaded.info };
+    save(to, &info, &loaded.policy, None, None)?;
+    Ok(info)
+}
+
 /// Reads a checkpoint or policy file, checking that every tensor is there with its shape.
 pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let bytes = std::fs::read(path).map_err(|source| CheckpointError::Read { path: path.to_owned(), source })?;
@@ -223,9 +247,6 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let info: CheckpointInfo = serde_json::from_str(json).map_err(|e| format(e.to_string()))?;
     if info.format_version != FORMAT_VERSION {
         return Err(format(format!("format version {} (this build reads {FORMAT_VERSION})", info.format_version)));
-    }
-    if info.kind != "policy" && info.kind != "checkpoint" {
-        return Err(format(format!("kind '{}' (expected 'policy' or 'checkpoint')", info.kind)));
     }
     if !(info.learning_rate.is_finite() && info.learning_rate > 0.0) {
         return Err(format(format!("learning rate {} (must be finite and positive)", info.learning_rate)));
@@ -277,7 +298,7 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         variance: read_f64("normalizer.variance", o)?,
         count: read_f64("normalizer.count", 1)?[0],
     };
-    let optimizer = if info.kind == "checkpoint" {
+    let optimizer = if info.kind == CheckpointKind::Checkpoint {
         let adam = |name: &str, len: usize| -> Result<Adam, CheckpointError> {
             let mut adam = Adam::new(len, info.learning_rate);
             adam.first_moment = read_f32(&format!("optimizer.{name}.exp_avg"), len)?;
@@ -293,7 +314,7 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     } else {
         None
     };
-    if info.kind == "checkpoint" && info.rng.as_ref().and_then(RngState::restore).is_none() {
+    if info.kind == CheckpointKind::Checkpoint && info.rng.as_ref().and_then(RngState::restore).is_none() {
         return Err(format("checkpoint without a valid random state".into()));
     }
     // Values a trained policy cannot hold: a file with them would fly or train on garbage.

@@ -198,6 +198,11 @@ impl RunnerConfig {
 
     /// The number of threads to use: `threads`, or one per core when 0.
     pub fn thread_count(&self) -> usize {
-        if self.threads > 0 { self.threads } else { std::thread::available_parallelism().map_or(1, |n| n.get()) }
+        threads_or_all_cores(self.threads)
     }
+}
+
+/// `requested` threads, or one per core when 0 (the meaning of 0 in every `threads` setting).
+pub fn threads_or_all_cores(requested: usize) -> usize {
+    if requested > 0 { requested } else { std::thread::available_parallelism().map_or(1, |n| n.get()) }
 }

@@ -6,12 +6,12 @@ use crate::vec_env::{EnvError, EpisodeRecord, VecEnv};
 
 /// Steps `env` with the policy's mean actions until `episodes` episodes finished (or `max_steps`
 /// batched steps passed); returns the first `episodes` of them.
-pub fn evaluate_mean_policy(
+pub fn evaluate_mean_policy<E: VecEnv>(
     policy: &ActorCritic,
-    env: &mut impl VecEnv,
+    env: &mut E,
     episodes: usize,
     max_steps: usize,
-) -> Result<Vec<EpisodeRecord>, EnvError> {
+) -> Result<Vec<EpisodeRecord<E::EndReason>>, EnvError> {
     let mut scratch = InferenceScratch::default();
     let mut actions = Vec::new();
     let mut finished = Vec::new();

@@ -30,4 +30,4 @@ pub mod vec_env;
 pub use actor_critic::{ActorCritic, InferenceScratch};
 pub use config::{PpoConfig, RunnerConfig, Schedule};
 pub use runner::{CheckpointEvent, CheckpointHook, IterationLog, Start, TrainError, Trainer};
-pub use vec_env::{EnvError, EpisodeRecord, VecEnv};
+pub use vec_env::{EndReason, EnvError, EpisodeRecord, VecEnv};

@@ -14,11 +14,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::actor_critic::ActorCritic;
-use crate::checkpoint::{self, CheckpointError};
+use crate::checkpoint::{self, CheckpointError, CheckpointKind};
 use crate::config::{PpoConfig, RunnerConfig};
 use crate::ppo::{Ppo, UpdateStats};
 use crate::training_log;
-use crate::vec_env::{EnvError, VecEnv};
+use crate::vec_env::{EndReason, EnvError, VecEnv};
 
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
@@ -65,7 +65,7 @@ pub struct IterationLog {
     /// Environment steps per second over this iteration.
     pub steps_per_s: f64,
     /// Episodes finished in this iteration, their mean return and length, and how they ended
-    /// (counts in the order of `VecEnv::end_reasons`).
+    /// (counts in the order of the environment's `EndReason::ALL`).
     pub episodes: usize,
     pub mean_return: f64,
     pub mean_length: f64,
@@ -229,7 +229,7 @@ impl<E: VecEnv> Trainer<E> {
                 ppo
             }
         };
-        let end_reasons = env.end_reasons();
+        let end_reasons = E::EndReason::ALL.iter().map(|r| r.name()).collect();
         let diagnostic_names = env.diagnostic_names();
         let trainer = Self {
             env,
@@ -328,7 +328,7 @@ impl<E: VecEnv> Trainer<E> {
             self.env_steps += collected;
             let samples = (envs * steps) as f64;
             let count = episodes.len();
-            let mean = |f: &dyn Fn(&crate::vec_env::EpisodeRecord) -> f64| {
+            let mean = |f: &dyn Fn(&crate::vec_env::EpisodeRecord<E::EndReason>) -> f64| {
                 if count == 0 { f64::NAN } else { episodes.iter().map(f).sum::<f64>() / count as f64 }
             };
             let log = IterationLog {
@@ -339,7 +339,7 @@ impl<E: VecEnv> Trainer<E> {
                 episodes: count,
                 mean_return: mean(&|e| e.episode_return),
                 mean_length: mean(&|e| e.length as f64),
-                end_counts: self.end_reasons.iter().map(|r| episodes.iter().filter(|e| e.end_reason == *r).count()).collect(),
+                end_counts: E::EndReason::ALL.iter().map(|r| episodes.iter().filter(|e| e.end == *r).count()).collect(),
                 mean_reward: reward_sum / samples,
                 diagnostics: diagnostic_sums.iter().map(|s| s / samples).collect(),
                 update,
@@ -356,7 +356,7 @@ impl<E: VecEnv> Trainer<E> {
             }
             if last {
                 let path = self.dir.join("policy.safetensors");
-                let info = checkpoint::describe(&self.ppo, "policy", self.iteration, self.env_steps, log.wall_time_s, &self.config_toml);
+                let info = checkpoint::describe(&self.ppo, CheckpointKind::Policy, self.iteration, self.env_steps, log.wall_time_s, &self.config_toml);
                 checkpoint::save(&path, &info, &self.ppo.policy, None, None)?;
                 break;
             }
@@ -366,7 +366,7 @@ impl<E: VecEnv> Trainer<E> {
 
     fn save_checkpoint(&self, wall_time_s: f64) -> Result<(), TrainError> {
         let path = checkpoint_dir(&self.dir).join(format!("iter_{:06}.safetensors", self.iteration));
-        let info = checkpoint::describe(&self.ppo, "checkpoint", self.iteration, self.env_steps, wall_time_s, &self.config_toml);
+        let info = checkpoint::describe(&self.ppo, CheckpointKind::Checkpoint, self.iteration, self.env_steps, wall_time_s, &self.config_toml);
         let environments = self.env.save_state().map_err(TrainError::Env)?;
         checkpoint::save(&path, &info, &self.ppo.policy, Some(&self.ppo.optimizer), Some(&environments))?;
         Ok(())

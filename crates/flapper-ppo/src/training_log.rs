@@ -28,60 +28,109 @@ pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String]) -> Vec<S
     h
 }
 
+/// One row of `training.csv`, in `header`'s column order, each number at the precision it is logged
+/// with.
+#[derive(serde::Serialize)]
+struct TrainingRow<'a> {
+    iteration: usize,
+    env_steps: u64,
+    #[serde(serialize_with = "fixed::<3, _>")]
+    wall_time_s: f64,
+    #[serde(serialize_with = "fixed::<1, _>")]
+    steps_per_s: f64,
+    episodes: usize,
+    #[serde(serialize_with = "fixed::<6, _>")]
+    mean_return: f64,
+    #[serde(serialize_with = "fixed::<3, _>")]
+    mean_length: f64,
+    end_counts: &'a [usize],
+    #[serde(serialize_with = "fixed::<6, _>")]
+    mean_reward: f64,
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    diagnostics: &'a [f64],
+    /// surrogate loss, value loss, entropy, KL, clip fraction, gradient norm, learning rate, action std.
+    #[serde(serialize_with = "each_fixed::<9, _>")]
+    update: [f64; 8],
+    /// environments, inference, update.
+    #[serde(serialize_with = "each_fixed::<4, _>")]
+    times_s: [f64; 3],
+}
+
+impl<'a> TrainingRow<'a> {
+    fn of(log: &'a IterationLog) -> Self {
+        let u = &log.update;
+        Self {
+            iteration: log.iteration,
+            env_steps: log.env_steps,
+            wall_time_s: log.wall_time_s,
+            steps_per_s: log.steps_per_s,
+            episodes: log.episodes,
+            mean_return: log.mean_return,
+            mean_length: log.mean_length,
+            end_counts: &log.end_counts,
+            mean_reward: log.mean_reward,
+            diagnostics: &log.diagnostics,
+            update: [u.surrogate_loss, u.value_loss, u.entropy, u.kl, u.clip_fraction, u.grad_norm, u.learning_rate, u.action_std],
+            times_s: [log.env_time_s, log.inference_time_s, log.update_time_s],
+        }
+    }
+}
+
+fn fixed<const DECIMALS: usize, S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.collect_str(&format_args!("{value:.DECIMALS$}"))
+}
+
+fn each_fixed<const DECIMALS: usize, S: serde::Serializer>(values: &[f64], serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.collect_seq(values.iter().map(|v| format!("{v:.DECIMALS$}")))
+}
+
+/// The rows' writer: no header of its own (the columns depend on the environment; `header` names them).
+fn writer<W: std::io::Write>(sink: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new().has_headers(false).from_writer(sink)
+}
+
 /// A fresh run writes the header; a resumed one keeps the rows up to its checkpoint's `iteration` (a
 /// killed run may have logged iterations past its last checkpoint, which the resumed run repeats).
 pub(crate) fn prepare(path: &Path, header: &[String], resume: bool, iteration: usize) -> Result<(), TrainError> {
     let path = path.to_owned();
-    let header = header.join(",");
-    let mut text = header.clone() + "\n";
+    let mut kept = writer(Vec::new());
+    let output = |e: csv::Error| TrainError::Output { path: path.clone(), message: e.to_string() };
+    kept.write_record(header).map_err(output)?;
     if resume && path.exists() {
         // Read strictly: a damaged log is refused, never silently shortened.
         let damaged = |problem: String| TrainError::DamagedLog { path: path.clone(), problem };
         let bytes = std::fs::read(&path).map_err(|e| damaged(format!("cannot be read ({e})")))?;
-        let existing = String::from_utf8(bytes)
-            .map_err(|e| damaged(format!("is not text (invalid UTF-8 at byte {})", e.utf8_error().valid_up_to())))?;
-        for (number, line) in existing.lines().enumerate().skip(1) {
-            let Some(row_iteration) = line.split(',').next().and_then(|v| v.parse::<usize>().ok()) else {
-                return Err(damaged(format!("line {} does not start with an iteration number", number + 1)));
+        if let Err(e) = std::str::from_utf8(&bytes) {
+            return Err(damaged(format!("is not text (invalid UTF-8 at byte {})", e.valid_up_to())));
+        }
+        let mut reader = csv::ReaderBuilder::new().flexible(true).from_reader(bytes.as_slice());
+        for record in reader.records() {
+            let record = record.map_err(|e| damaged(format!("cannot be read as CSV ({e})")))?;
+            let line = record.position().map_or(0, |p| p.line());
+            let Some(row_iteration) = record.get(0).and_then(|v| v.parse::<usize>().ok()) else {
+                return Err(damaged(format!("line {line} does not start with an iteration number")));
             };
+            // Rows past the checkpoint are dropped whole, a row cut short by a crash among them.
             if row_iteration <= iteration {
-                text.push_str(line);
-                text.push('\n');
+                if record.len() != header.len() {
+                    return Err(damaged(format!("line {line} has {} fields, the header {}", record.len(), header.len())));
+                }
+                kept.write_record(&record).map_err(output)?;
             }
         }
     }
-    checkpoint::write_atomically(&path, text.as_bytes())?;
+    let text = kept.into_inner().map_err(|e| TrainError::Output { path: path.clone(), message: e.to_string() })?;
+    checkpoint::write_atomically(&path, &text)?;
     Ok(())
 }
 
 /// Appends one iteration's row (a crash loses at most this row, which `prepare` then refuses).
 pub(crate) fn append(path: &Path, log: &IterationLog) -> Result<(), TrainError> {
-    use std::io::Write;
-    let path = path.to_owned();
-    let u = &log.update;
-    let mut fields: Vec<String> = vec![
-        log.iteration.to_string(),
-        log.env_steps.to_string(),
-        format!("{:.3}", log.wall_time_s),
-        format!("{:.1}", log.steps_per_s),
-        log.episodes.to_string(),
-        format!("{:.6}", log.mean_return),
-        format!("{:.3}", log.mean_length),
-    ];
-    fields.extend(log.end_counts.iter().map(|c| c.to_string()));
-    fields.push(format!("{:.6}", log.mean_reward));
-    fields.extend(log.diagnostics.iter().map(|d| format!("{d:.6}")));
-    for v in [u.surrogate_loss, u.value_loss, u.entropy, u.kl, u.clip_fraction, u.grad_norm, u.learning_rate, u.action_std] {
-        fields.push(format!("{v:.9}"));
-    }
-    for v in [log.env_time_s, log.inference_time_s, log.update_time_s] {
-        fields.push(format!("{v:.4}"));
-    }
-    let mut file = std::fs::OpenOptions::new()
-        .append(true)
-        .open(&path)
-        .map_err(|e| TrainError::Output { path: path.clone(), message: e.to_string() })?;
-    writeln!(file, "{}", fields.join(",")).map_err(|e| TrainError::Output { path, message: e.to_string() })
+    let output = |message: String| TrainError::Output { path: path.to_owned(), message };
+    let file = std::fs::OpenOptions::new().append(true).open(path).map_err(|e| output(e.to_string()))?;
+    let mut rows = writer(file);
+    rows.serialize(TrainingRow::of(log)).map_err(|e| output(e.to_string()))?;
+    rows.flush().map_err(|e| output(e.to_string()))
 }
 
 /// Reads the plotted columns of a training CSV back (for learning curves over resumed runs).

@@ -5,16 +5,27 @@
 /// An environment's error, passed through the learner unchanged.
 pub type EnvError = Box<dyn std::error::Error + Send + Sync>;
 
+/// Why an episode ended, as an environment defines it (the flight task's `EpisodeEnd`, the
+/// pendulum's fall or time limit). The training log counts each in its own `end_<name>` column.
+pub trait EndReason: Copy + Eq + std::fmt::Debug + 'static {
+    /// Every value, in the order of the training log's columns.
+    const ALL: &'static [Self];
+    /// Its name in the training log.
+    fn name(self) -> &'static str;
+}
+
 /// One finished episode.
 #[derive(Debug, Clone, PartialEq)]
-pub struct EpisodeRecord {
+pub struct EpisodeRecord<R> {
     pub episode_return: f64,
     pub length: usize,
-    /// Why it ended: one of [`VecEnv::end_reasons`].
-    pub end_reason: &'static str,
+    pub end: R,
 }
 
 pub trait VecEnv {
+    /// Why this environment's episodes end.
+    type EndReason: EndReason;
+
     fn num_envs(&self) -> usize;
     fn observation_size(&self) -> usize;
     fn action_size(&self) -> usize;
@@ -36,9 +47,7 @@ pub trait VecEnv {
     fn final_observations(&self) -> &[f32];
 
     /// Episodes finished since the last call.
-    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord>;
-    /// Every value `EpisodeRecord::end_reason` can take (one CSV column each).
-    fn end_reasons(&self) -> Vec<&'static str>;
+    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord<Self::EndReason>>;
 
     /// Names of per-step diagnostics the learner averages and logs (e.g. reward terms).
     fn diagnostic_names(&self) -> Vec<String> {

@@ -76,15 +76,21 @@ impl Source {
     }
 }
 
-/// One claim of the paper beside ours.
-#[derive(Debug, Clone, PartialEq)]
+/// One claim of the paper beside ours: a row of `paper_vs_flapper.csv`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Row {
     pub claim: String,
     pub paper: String,
     /// Our figures, each the formatted value of a source.
     pub flapper: String,
     pub verdict: String,
+    /// In the file: space-separated descriptions ([`Source::describe`]).
+    #[serde(serialize_with = "described")]
     pub sources: Vec<Source>,
+}
+
+fn described<S: serde::Serializer>(sources: &[Source], serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.collect_str(&sources.iter().map(Source::describe).collect::<Vec<_>>().join(" "))
 }
 
 /// What the paper says, and the files of a report run.
@@ -212,10 +218,8 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
 pub fn write_csv(rows: &[Row], path: &Path) -> Result<(), ReportError> {
     let fail = |e: &dyn std::fmt::Display| ReportError::Write { path: path.to_owned(), message: e.to_string() };
     let mut writer = csv::Writer::from_writer(Vec::new());
-    writer.write_record(["claim", "paper", "flapper", "verdict", "sources"]).map_err(|e| fail(&e))?;
     for r in rows {
-        let sources = r.sources.iter().map(Source::describe).collect::<Vec<_>>().join(" ");
-        writer.write_record([&r.claim, &r.paper, &r.flapper, &r.verdict, &sources]).map_err(|e| fail(&e))?;
+        writer.serialize(r).map_err(|e| fail(&e))?;
     }
     let bytes = writer.into_inner().map_err(|e| fail(&e))?;
     write_file(path, &bytes)

@@ -41,7 +41,7 @@ pub struct TaskConfig {
 }
 
 /// Paper III-A: policy at 50 Hz, simulation at 250 Hz, 7 Hz filter on the targets.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ControlConfig {
     /// Simulation steps (4 ms each) per policy step.

@@ -5,27 +5,14 @@ use flapper_sim::{InitialState, ModelError, N_ACTUATED_JOINTS, SimFault, Simulat
 use serde::{Deserialize, Serialize};
 
 use crate::action_filter::LowPassFilter;
-
-/// Rates of the control loop. Paper defaults: 50 Hz decisions, 5 substeps of 4 ms, 7 Hz filter.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ControlLoopConfig {
-    /// Simulation steps per control decision (250 Hz / 50 Hz).
-    pub substeps: usize,
-    /// Cutoff of the first-order filter on the joint targets.
-    pub filter_cutoff_hz: f64,
-}
-
-impl Default for ControlLoopConfig {
-    fn default() -> Self {
-        Self { substeps: 5, filter_cutoff_hz: 7.0 }
-    }
-}
+use crate::config::ControlConfig;
 
 /// A simulator driven through the filter at the control rate.
 pub struct ControlLoop {
     sim: Simulator,
     filter: LowPassFilter,
-    config: ControlLoopConfig,
+    /// Its substeps and filter cutoff (the action scale belongs to the task's action map).
+    config: ControlConfig,
     commanded: [f64; N_ACTUATED_JOINTS],
     last_step_work: JointWork,
 }
@@ -51,7 +38,7 @@ pub struct ControlLoopState {
 }
 
 impl ControlLoop {
-    pub fn new(sim: Simulator, config: ControlLoopConfig) -> Self {
+    pub fn new(sim: Simulator, config: ControlConfig) -> Self {
         let filter = LowPassFilter::new(config.filter_cutoff_hz, sim.timestep_s());
         let mut control =
             Self { sim, filter, config, commanded: [0.0; N_ACTUATED_JOINTS], last_step_work: JointWork::default() };

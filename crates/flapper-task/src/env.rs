@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap};
 use crate::config::TaskConfig;
-use crate::control_loop::{ControlLoop, ControlLoopConfig, ControlLoopState};
+use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
 use crate::reference::generator::procedural;
@@ -108,10 +108,7 @@ impl FlightEnv {
     ) -> Result<Self, ModelError> {
         let sim = robot.instantiate()?;
         let actions = ActionMap::new(&sim, config.control.action_scale);
-        let control = ControlLoop::new(
-            sim,
-            ControlLoopConfig { substeps: config.control.substeps, filter_cutoff_hz: config.control.filter_cutoff_hz },
-        );
+        let control = ControlLoop::new(sim, config.control);
         let layout = ObservationLayout::of(&config.observation);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);

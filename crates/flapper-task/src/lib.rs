@@ -23,7 +23,7 @@ pub mod termination;
 pub mod vec_env;
 
 pub use action_filter::LowPassFilter;
-pub use config::TaskConfig;
-pub use control_loop::{ControlLoop, ControlLoopConfig, JointWork};
+pub use config::{ControlConfig, TaskConfig};
+pub use control_loop::{ControlLoop, JointWork};
 pub use env::{EpisodeInfo, FlightEnv, ReferenceSource};
 pub use vec_env::FlightVecEnv;

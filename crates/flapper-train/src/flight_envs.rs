@@ -1,7 +1,7 @@
 //! The flight task's vectorized environments as the learner sees them: the [`VecEnv`] interface over
 //! [`FlightVecEnv`], with the four reward kernels as per-step diagnostics.
 
-use flapper_ppo::{EnvError, EpisodeRecord, VecEnv};
+use flapper_ppo::{EndReason, EnvError, EpisodeRecord, VecEnv};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::termination::EpisodeEnd;
 use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
@@ -11,6 +11,26 @@ pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level"
 
 /// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
 const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
+
+/// The flight task's [`EpisodeEnd`] as the learner counts it (the learner's trait on the task's type).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FlightEnd(pub EpisodeEnd);
+
+impl EndReason for FlightEnd {
+    const ALL: &'static [Self] = &{
+        let mut all = [FlightEnd(EpisodeEnd::ALL[0]); EpisodeEnd::ALL.len()];
+        let mut i = 1;
+        while i < all.len() {
+            all[i] = FlightEnd(EpisodeEnd::ALL[i]);
+            i += 1;
+        }
+        all
+    };
+
+    fn name(self) -> &'static str {
+        self.0.name()
+    }
+}
 
 pub struct FlightEnvs {
     inner: FlightVecEnv,
@@ -32,6 +52,8 @@ impl FlightEnvs {
 }
 
 impl VecEnv for FlightEnvs {
+    type EndReason = FlightEnd;
+
     fn num_envs(&self) -> usize {
         self.inner.len()
     }
@@ -72,16 +94,12 @@ impl VecEnv for FlightEnvs {
         self.inner.final_observations()
     }
 
-    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord> {
+    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord<FlightEnd>> {
         self.inner
             .take_finished_episodes()
             .into_iter()
-            .map(|e| EpisodeRecord { episode_return: e.episode_return, length: e.length, end_reason: e.end.name() })
+            .map(|e| EpisodeRecord { episode_return: e.episode_return, length: e.length, end: FlightEnd(e.end) })
             .collect()
-    }
-
-    fn end_reasons(&self) -> Vec<&'static str> {
-        EpisodeEnd::ALL.iter().map(|e| e.name()).collect()
     }
 
     fn diagnostic_names(&self) -> Vec<String> {

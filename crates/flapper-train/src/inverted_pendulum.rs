@@ -8,7 +8,7 @@ use mujoco_rs::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use flapper_ppo::{EnvError, EpisodeRecord, VecEnv};
+use flapper_ppo::{EndReason, EnvError, EpisodeRecord, VecEnv};
 
 /// The MJCF of `models/inverted_pendulum.xml`, compiled in.
 pub const INVERTED_PENDULUM_MJCF: &str = include_str!("../../../models/inverted_pendulum.xml");
@@ -22,9 +22,25 @@ const FALLEN_RAD: f64 = 0.2;
 const RESET_NOISE: f64 = 0.01;
 const OBSERVATION_SIZE: usize = 4;
 
-const FELL: &str = "pole_fell";
-/// The end reason of an episode that reached [`MAX_EPISODE_STEPS`].
-pub const TIME_LIMIT: &str = "time_limit";
+/// How a pendulum episode ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PendulumEnd {
+    /// The pole leaned past [`FALLEN_RAD`] (terminated).
+    PoleFell,
+    /// [`MAX_EPISODE_STEPS`] reached (truncated).
+    TimeLimit,
+}
+
+impl EndReason for PendulumEnd {
+    const ALL: &'static [Self] = &[Self::PoleFell, Self::TimeLimit];
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::PoleFell => "pole_fell",
+            Self::TimeLimit => "time_limit",
+        }
+    }
+}
 
 struct Pendulum {
     data: MjData<Box<MjModel>>,
@@ -63,7 +79,7 @@ pub struct InvertedPendulumEnvs {
     rewards: Vec<f32>,
     terminated: Vec<bool>,
     truncated: Vec<bool>,
-    finished: Vec<EpisodeRecord>,
+    finished: Vec<EpisodeRecord<PendulumEnd>>,
 }
 
 impl InvertedPendulumEnvs {
@@ -110,6 +126,8 @@ struct PendulumSnapshot {
 }
 
 impl VecEnv for InvertedPendulumEnvs {
+    type EndReason = PendulumEnd;
+
     fn num_envs(&self) -> usize {
         self.envs.len()
     }
@@ -144,7 +162,7 @@ impl VecEnv for InvertedPendulumEnvs {
                 self.finished.push(EpisodeRecord {
                     episode_return: env.episode_return,
                     length: env.steps,
-                    end_reason: if fell { FELL } else { TIME_LIMIT },
+                    end: if fell { PendulumEnd::PoleFell } else { PendulumEnd::TimeLimit },
                 });
                 env.observe(&mut self.final_observations[i * OBSERVATION_SIZE..(i + 1) * OBSERVATION_SIZE]);
                 env.reset();
@@ -174,12 +192,8 @@ impl VecEnv for InvertedPendulumEnvs {
         &self.final_observations
     }
 
-    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord> {
+    fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord<PendulumEnd>> {
         std::mem::take(&mut self.finished)
-    }
-
-    fn end_reasons(&self) -> Vec<&'static str> {
-        vec![FELL, TIME_LIMIT]
     }
 
     fn save_state(&self) -> Result<Vec<u8>, EnvError> {

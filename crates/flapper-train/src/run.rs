@@ -4,12 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use flapper_ppo::evaluate::evaluate_mean_policy;
-use flapper_ppo::{PpoConfig, RunnerConfig, Start, TrainError, Trainer};
+use flapper_ppo::{EndReason, PpoConfig, RunnerConfig, Start, TrainError, Trainer};
 use flapper_sim::{ModelError, RobotModel};
 
 use crate::config::{TrainConfig, TrainConfigError};
 use crate::flight_envs::FlightEnvs;
-use crate::inverted_pendulum::{InvertedPendulumEnvs, MAX_EPISODE_STEPS, TIME_LIMIT};
+use crate::inverted_pendulum::{InvertedPendulumEnvs, MAX_EPISODE_STEPS, PendulumEnd};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -67,7 +67,7 @@ pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes:
     let config_text = format!("# inverted pendulum check, seed {seed}\n");
     let mut trainer = Trainer::new(envs, ppo, runner, config_text, dir, Start::Fresh)?;
     trainer.add_checkpoint_hook(crate::curves::learning_curves_hook());
-    let time_limit_column = trainer.end_reasons().iter().position(|r| *r == TIME_LIMIT).expect("the pendulum reports time limits");
+    let time_limit_column = PendulumEnd::ALL.iter().position(|r| *r == PendulumEnd::TimeLimit).expect("the pendulum reports time limits");
     let mut recent: Vec<f64> = Vec::new();
     let mut outcome = PendulumOutcome { steps_to_solve: None, iterations: 0, test_returns: Vec::new() };
     let mut test_error = None;

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_ppo::checkpoint::{self, CheckpointError, CheckpointKind};
 use flapper_ppo::{PpoConfig, RunnerConfig, Start, TrainError, Trainer};
 use flapper_sim::RobotModel;
 use flapper_train::run::{flight_trainer, solve_inverted_pendulum};
@@ -170,13 +170,10 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     negative_variance.normalizer.variance[7] = -1.0;
     let mut nan_mean = source.policy.clone();
     nan_mean.normalizer.mean[0] = f64::NAN;
-    let mut unknown_kind = source.info.clone();
-    unknown_kind.kind = "weights".into();
     for (info, policy, needle) in [
         (&source.info, &nan_weight, "'actor' holds a non-finite value"),
         (&source.info, &negative_variance, "negative variance"),
         (&source.info, &nan_mean, "'normalizer.mean' holds a non-finite value"),
-        (&unknown_kind, &source.policy, "kind 'weights'"),
     ] {
         checkpoint::save(&bad_file, info, policy, None, None).unwrap();
         let err = checkpoint::load(&bad_file).unwrap_err();
@@ -192,6 +189,27 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     std::fs::write(&bad_file, &bytes).unwrap();
     let err = checkpoint::load(&bad_file).unwrap_err();
     assert!(err.to_string().contains("has shape [540, 16], expected [16, 540]"), "{err}");
+    // So is a kind other than policy or checkpoint (the description is JSON inside the header).
+    let mut bytes = std::fs::read(dir.join("policy.safetensors")).unwrap();
+    let header = String::from_utf8(bytes[8..8 + header_len].to_vec()).unwrap();
+    let renamed = header.replacen(r#"\"kind\": \"policy\""#, r#"\"kind\": \"weight\""#, 1);
+    assert_ne!(renamed, header, "the description names its kind");
+    bytes[8..8 + header_len].copy_from_slice(renamed.as_bytes());
+    std::fs::write(&bad_file, &bytes).unwrap();
+    let err = checkpoint::load(&bad_file).unwrap_err();
+    assert!(err.to_string().contains("unknown variant `weight`") && err.to_string().contains("bad.safetensors"), "{err}");
+    // Exporting a policy never overwrites: an existing target is refused and kept.
+    let err = checkpoint::export_policy(&dir.join("policy.safetensors"), &bad_file).unwrap_err();
+    assert!(err.to_string().contains("exists") && err.to_string().contains("bad.safetensors"), "{err}");
+    assert_eq!(std::fs::read(&bad_file).unwrap(), bytes);
+    // Exported from a checkpoint: the same networks, as a policy (no optimizer, no random state).
+    let from = flapper_ppo::runner::latest_checkpoint(&dir).expect("the run saved checkpoints");
+    let exported = renoised.join("exported.safetensors");
+    let info = checkpoint::export_policy(&from, &exported).unwrap();
+    let (saved, loaded) = (checkpoint::load(&from).unwrap(), checkpoint::load(&exported).unwrap());
+    assert_eq!((saved.info.kind, info.kind, loaded.info.kind), (CheckpointKind::Checkpoint, CheckpointKind::Policy, CheckpointKind::Policy));
+    assert!(loaded.optimizer.is_none() && loaded.info.rng.is_none() && loaded.environments.is_none());
+    assert_eq!((loaded.policy.actor, loaded.info.iteration), (saved.policy.actor, saved.info.iteration));
     for d in [dir, pendulum_dir, other, chained, renoised] {
         std::fs::remove_dir_all(d).ok();
     }
@@ -217,7 +235,19 @@ fn nothing_saved_is_lost_user_files_damaged_logs_and_failed_writes() {
     invalid_utf8[good.len() - 5] = 0xff;
     let mut bad_line = good.clone();
     bad_line.extend_from_slice(b"garbage,row\n");
-    for (damaged, needle) in [(invalid_utf8, "invalid UTF-8"), (bad_line, "line 4 does not start with an iteration number")] {
+    // Iteration 1's row without its last field.
+    let text = String::from_utf8(good.clone()).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let fields = lines[0].split(',').count();
+    let cut = lines[1].rfind(',').unwrap();
+    lines[1].truncate(cut);
+    let short_row = (lines.join("\n") + "\n").into_bytes();
+    let short_needle = format!("line 2 has {} fields, the header {fields}", fields - 1);
+    for (damaged, needle) in [
+        (invalid_utf8, "invalid UTF-8"),
+        (bad_line, "line 4 does not start with an iteration number"),
+        (short_row, short_needle.as_str()),
+    ] {
         std::fs::write(&log, &damaged).unwrap();
         let err = flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).err().unwrap();
         assert!(err.to_string().contains(needle) && err.to_string().contains("training.csv"), "{err}");
