@@ -5,6 +5,8 @@ use std::path::Path;
 use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, SimFault, Vec3, quat_to_wxyz};
 use flapper_task::ControlLoop;
 
+use flapper_files::decimals::{each_fixed, fixed};
+
 use crate::OutputError;
 use crate::controller::FlightState;
 
@@ -154,28 +156,16 @@ impl FlightLog {
     /// and torque, then the mechanical power. SI units, angles in radians.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
         let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-        let mut writer = csv::Writer::from_writer(Vec::new());
+        let mut writer = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
         writer.write_record(Self::csv_header()).map_err(|e| error(&e))?;
         for row in &self.rows {
-            let s = &row.state;
-            let mut record: Vec<f64> = vec![s.time_s];
-            record.extend(s.position_m.to_array());
-            record.extend(quat_to_wxyz(s.orientation));
-            record.extend(s.euler_rad);
-            record.extend(s.velocity_mps.to_array());
-            record.push(s.airspeed_mps);
-            record.extend(s.body_rates_radps.to_array());
-            record.extend(s.joint_positions_rad);
-            record.extend(row.commanded_rad);
-            record.extend(row.applied_rad);
-            record.extend(row.torques_nm);
-            record.push(row.mechanical_power_w);
-            writer.write_record(record.iter().map(|v| format!("{v:.6}"))).map_err(|e| error(&e))?;
+            writer.serialize(FlightCsvRow::of(row)).map_err(|e| error(&e))?;
         }
         let bytes = writer.into_inner().map_err(|e| error(&e))?;
         flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
     }
 
+    /// The column names of [`FlightCsvRow`].
     fn csv_header() -> Vec<String> {
         let mut header: Vec<String> = [
             "time_s", "x_m", "y_m", "z_m", "qw", "qx", "qy", "qz", "roll_rad", "pitch_rad", "yaw_rad", "vx_mps",
@@ -188,5 +178,54 @@ impl FlightLog {
         }
         header.push("mechanical_power_w".into());
         header
+    }
+}
+
+/// A row of `flight.csv`, every number at 6 decimals (columns in `FlightLog::csv_header`'s order).
+#[derive(serde::Serialize)]
+struct FlightCsvRow {
+    #[serde(serialize_with = "fixed::<6, _>")]
+    time_s: f64,
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    position_m: [f64; 3],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    quaternion_wxyz: [f64; 4],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    euler_rad: [f64; 3],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    velocity_mps: [f64; 3],
+    #[serde(serialize_with = "fixed::<6, _>")]
+    airspeed_mps: f64,
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    body_rates_radps: [f64; 3],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    joint_positions_rad: [f64; N_ACTUATED_JOINTS],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    commanded_rad: [f64; N_ACTUATED_JOINTS],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    applied_rad: [f64; N_ACTUATED_JOINTS],
+    #[serde(serialize_with = "each_fixed::<6, _>")]
+    torques_nm: [f64; N_ACTUATED_JOINTS],
+    #[serde(serialize_with = "fixed::<6, _>")]
+    mechanical_power_w: f64,
+}
+
+impl FlightCsvRow {
+    fn of(row: &FlightRow) -> Self {
+        let s = &row.state;
+        Self {
+            time_s: s.time_s,
+            position_m: s.position_m.to_array(),
+            quaternion_wxyz: quat_to_wxyz(s.orientation),
+            euler_rad: s.euler_rad,
+            velocity_mps: s.velocity_mps.to_array(),
+            airspeed_mps: s.airspeed_mps,
+            body_rates_radps: s.body_rates_radps.to_array(),
+            joint_positions_rad: s.joint_positions_rad,
+            commanded_rad: row.commanded_rad,
+            applied_rad: row.applied_rad,
+            torques_nm: row.torques_nm,
+            mechanical_power_w: row.mechanical_power_w,
+        }
     }
 }

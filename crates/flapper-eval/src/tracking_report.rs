@@ -5,12 +5,13 @@
 
 use std::path::{Path, PathBuf};
 
+use flapper_files::decimals::{each_fixed, fixed};
 use flapper_plot::{COLORS, Curve, Panel};
-use flapper_sim::ActuatedJoint;
+use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS};
 
 use crate::OutputError;
 use crate::plots::{JointSample, write_joint_window};
-use crate::tracking::EpisodeResult;
+use crate::tracking::{EpisodeResult, TrackingStep};
 
 /// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
@@ -160,10 +161,54 @@ impl TrackingSummary {
     }
 }
 
-/// One row per control step of every episode.
-pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
-    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-    let mut out = csv::Writer::from_writer(Vec::new());
+/// A row of `steps.csv`: one control step of one episode (columns in [`steps_csv_header`]'s order).
+#[derive(serde::Serialize)]
+struct StepRow {
+    episode: usize,
+    #[serde(serialize_with = "fixed::<2, _>")]
+    time_s: f64,
+    #[serde(serialize_with = "each_fixed::<4, _>")]
+    position_m: [f64; 3],
+    #[serde(serialize_with = "each_fixed::<4, _>")]
+    target_m: [f64; 3],
+    #[serde(serialize_with = "fixed::<4, _>")]
+    error_m: f64,
+    #[serde(serialize_with = "fixed::<3, _>")]
+    airspeed_mps: f64,
+    #[serde(serialize_with = "each_fixed::<4, _>")]
+    euler_rad: [f64; 3],
+    /// Each joint's angle, then its target.
+    #[serde(serialize_with = "each_fixed::<4, _>")]
+    joints_rad: [f64; 2 * N_ACTUATED_JOINTS],
+    #[serde(serialize_with = "fixed::<3, _>")]
+    mechanical_power_w: f64,
+    #[serde(serialize_with = "fixed::<3, _>")]
+    absolute_power_w: f64,
+}
+
+impl StepRow {
+    fn of(s: &TrackingStep) -> Self {
+        let mut joints_rad = [0.0; 2 * N_ACTUATED_JOINTS];
+        for (i, pair) in joints_rad.chunks_exact_mut(2).enumerate() {
+            pair.copy_from_slice(&[s.joint_positions_rad[i], s.joint_targets_rad[i]]);
+        }
+        Self {
+            episode: s.episode,
+            time_s: s.time_s,
+            position_m: s.position_m.to_array(),
+            target_m: s.target_m.to_array(),
+            error_m: s.error_m,
+            airspeed_mps: s.airspeed_mps,
+            euler_rad: s.euler_rad,
+            joints_rad,
+            mechanical_power_w: s.mechanical_power_w,
+            absolute_power_w: s.absolute_power_w,
+        }
+    }
+}
+
+/// The column names of [`StepRow`].
+fn steps_csv_header() -> Vec<String> {
     let mut header: Vec<String> = [
         "episode", "time_s", "x_m", "y_m", "z_m", "target_x_m", "target_y_m", "target_z_m", "error_m", "airspeed_mps", "roll_rad",
         "pitch_rad", "yaw_rad",
@@ -175,24 +220,16 @@ pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), Out
         header.push(format!("{}_target_rad", joint.name()));
     }
     header.extend(["mechanical_power_w".into(), "absolute_power_w".into()]);
-    out.write_record(&header).map_err(|e| error(&e))?;
-    for result in results {
-        for s in &result.steps {
-            let mut row = vec![s.episode.to_string(), format!("{:.2}", s.time_s)];
-            for v in [s.position_m, s.target_m] {
-                row.extend([v.x, v.y, v.z].map(|x| format!("{x:.4}")));
-            }
-            row.push(format!("{:.4}", s.error_m));
-            row.push(format!("{:.3}", s.airspeed_mps));
-            row.extend(s.euler_rad.map(|x| format!("{x:.4}")));
-            for i in 0..s.joint_positions_rad.len() {
-                row.push(format!("{:.4}", s.joint_positions_rad[i]));
-                row.push(format!("{:.4}", s.joint_targets_rad[i]));
-            }
-            row.push(format!("{:.3}", s.mechanical_power_w));
-            row.push(format!("{:.3}", s.absolute_power_w));
-            out.write_record(&row).map_err(|e| error(&e))?;
-        }
+    header
+}
+
+/// One row per control step of every episode.
+pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
+    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
+    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+    out.write_record(steps_csv_header()).map_err(|e| error(&e))?;
+    for s in results.iter().flat_map(|r| &r.steps) {
+        out.serialize(StepRow::of(s)).map_err(|e| error(&e))?;
     }
     let bytes = out.into_inner().map_err(|e| error(&e))?;
     flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))

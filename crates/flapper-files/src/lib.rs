@@ -1,5 +1,6 @@
 //! The one way flapper writes an output file: complete or absent, never half written. Every crate
 //! that writes files (learner checkpoints, plots, evaluation CSVs, the report) goes through it.
+//! [`decimals`] prints a CSV row's numbers at the precision its file keeps.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -19,9 +20,40 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// `serialize_with` helpers for `Serialize` CSV rows: a number, or each of several, at `DECIMALS`
+/// decimals (`#[serde(serialize_with = "flapper_files::decimals::fixed::<3, _>")]`). A row with
+/// several numbers in one field has its header written by hand beside it (the csv crate names only
+/// single-value fields).
+pub mod decimals {
+    use serde::Serializer;
+
+    pub fn fixed<const DECIMALS: usize, S: Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(&format_args!("{value:.DECIMALS$}"))
+    }
+
+    pub fn each_fixed<const DECIMALS: usize, S: Serializer>(values: &[f64], serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(values.iter().map(|v| format!("{v:.DECIMALS$}")))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_prints_each_number_at_its_decimals() {
+        #[derive(serde::Serialize)]
+        struct Row {
+            n: usize,
+            #[serde(serialize_with = "decimals::fixed::<2, _>")]
+            x: f64,
+            #[serde(serialize_with = "decimals::each_fixed::<1, _>")]
+            v: [f64; 3],
+        }
+        let mut writer = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+        writer.serialize(Row { n: 7, x: 1.0 / 3.0, v: [0.04, -2.25, 10.0] }).unwrap();
+        assert_eq!(String::from_utf8(writer.into_inner().unwrap()).unwrap(), "7,0.33,0.0,-2.2,10.0\n");
+    }
 
     #[test]
     fn replaces_whole_or_leaves_the_old_file_and_no_temporary() {

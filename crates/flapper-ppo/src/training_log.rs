@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use flapper_files::decimals::{each_fixed, fixed};
+
 use crate::checkpoint;
 use crate::ppo::UpdateStats;
 use crate::runner::{IterationLog, TrainError};
@@ -74,14 +76,6 @@ impl<'a> TrainingRow<'a> {
             times_s: [log.env_time_s, log.inference_time_s, log.update_time_s],
         }
     }
-}
-
-fn fixed<const DECIMALS: usize, S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
-    serializer.collect_str(&format_args!("{value:.DECIMALS$}"))
-}
-
-fn each_fixed<const DECIMALS: usize, S: serde::Serializer>(values: &[f64], serializer: S) -> Result<S::Ok, S::Error> {
-    serializer.collect_seq(values.iter().map(|v| format!("{v:.DECIMALS$}")))
 }
 
 /// The rows' writer: no header of its own (the columns depend on the environment; `header` names them).
