@@ -7,7 +7,7 @@ use std::sync::Arc;
 use anyhow::{Context, Result, bail};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::tracking::{Pilot, evaluate_tracking};
-use flapper_eval::tracking_report::{TrackingSummary, write_steps_csv, write_tracking_plots};
+use flapper_eval::tracking_report::{TrackingSummary, write_observations_csv, write_steps_csv, write_summary_csv, write_tracking_plots};
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 use flapper_eval::load_flight_policy;
@@ -71,37 +71,15 @@ pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
         print!("{name:>26}");
     }
     println!();
-    // summary.csv: a row per metric, a column per pilot (the printed table), quoted by the csv crate.
-    let mut csv = csv::Writer::from_writer(Vec::new());
-    csv.write_record(std::iter::once("metric").chain(summaries.iter().map(|(name, _)| *name)))?;
     for (k, (label, _)) in tables[0].iter().enumerate() {
         print!("{label:<36}");
         for table in &tables {
             print!("{:>26}", table[k].1);
         }
         println!();
-        csv.write_record(std::iter::once(label.as_str()).chain(tables.iter().map(|t| t[k].1.as_str())))?;
     }
-    let csv = csv.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
     let summary_path = out.join("summary.csv");
-    flapper_plot::write_atomically(&summary_path, &csv).with_context(|| format!("cannot write '{}'", summary_path.display()))?;
+    write_summary_csv(&summaries, &summary_path)?;
     println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
-    Ok(())
-}
-
-/// `observations.csv`: step, the observation's named columns, then `action_q1`..`action_q5`.
-fn write_observations_csv(record: &flapper_eval::tracking::EpisodeRecord, names: &[String], path: &Path) -> Result<()> {
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    let mut header = vec!["step".to_owned()];
-    header.extend(names.iter().cloned());
-    header.extend((1..=record.actions.first().map_or(5, Vec::len)).map(|k| format!("action_q{k}")));
-    writer.write_record(&header)?;
-    for (step, (observation, action)) in record.observations.iter().zip(&record.actions).enumerate() {
-        let mut row = vec![step.to_string()];
-        row.extend(observation.iter().chain(action).map(|v| v.to_string()));
-        writer.write_record(&row)?;
-    }
-    let bytes = writer.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
-    flapper_plot::write_atomically(path, &bytes).with_context(|| format!("cannot write '{}'", path.display()))?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS};
 
 use crate::OutputError;
 use crate::plots::{JointSample, write_joint_window};
-use crate::tracking::{EpisodeResult, TrackingStep};
+use crate::tracking::{EpisodeRecord, EpisodeResult, TrackingStep};
 
 /// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
@@ -300,4 +300,42 @@ pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, 
     ];
     draw(&attitude, (1100, 1000), &panels, (4, 1))?;
     Ok(vec![path_3d, path_views, error, joints, attitude])
+}
+
+/// `summary.csv`: the printed table, a row per metric and a column per pilot (`metric,NAME,...`).
+pub fn write_summary_csv(summaries: &[(&str, TrackingSummary)], path: &Path) -> Result<(), OutputError> {
+    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
+    let tables: Vec<Vec<(String, String)>> = summaries.iter().map(|(_, s)| s.rows()).collect();
+    let mut out = csv::Writer::from_writer(Vec::new());
+    out.write_record(std::iter::once("metric").chain(summaries.iter().map(|(name, _)| *name))).map_err(|e| error(&e))?;
+    for (k, (label, _)) in tables.first().map_or(&[][..], Vec::as_slice).iter().enumerate() {
+        out.write_record(std::iter::once(label.as_str()).chain(tables.iter().map(|t| t[k].1.as_str()))).map_err(|e| error(&e))?;
+    }
+    let bytes = out.into_inner().map_err(|e| error(&e))?;
+    flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
+}
+
+/// A row of `observations.csv`: the step, what the pilot observed (named by the observation layout)
+/// and the actions it chose.
+#[derive(serde::Serialize)]
+struct ObservationRow<'a> {
+    step: usize,
+    observation: &'a [f32],
+    action: &'a [f32],
+}
+
+/// `observations.csv`: `step`, the observation's `names`, then `action_q1`..`action_q5`, a row per
+/// control step of the recorded episode.
+pub fn write_observations_csv(record: &EpisodeRecord, names: &[String], path: &Path) -> Result<(), OutputError> {
+    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
+    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+    let mut header = vec!["step".to_owned()];
+    header.extend(names.iter().cloned());
+    header.extend((1..=record.actions.first().map_or(N_ACTUATED_JOINTS, Vec::len)).map(|k| format!("action_q{k}")));
+    out.write_record(&header).map_err(|e| error(&e))?;
+    for (step, (observation, action)) in record.observations.iter().zip(&record.actions).enumerate() {
+        out.serialize(ObservationRow { step, observation, action }).map_err(|e| error(&e))?;
+    }
+    let bytes = out.into_inner().map_err(|e| error(&e))?;
+    flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
 }
