@@ -46,7 +46,9 @@ train: mujoco
 	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
 	$(FLAPPER) train --config configs/stage3.toml --init-from runs/stage2/policy.safetensors --out runs/stage3
 	$(FLAPPER) train --config configs/stage4.toml --init-from runs/stage3/policy.safetensors --out runs/stage4a
-	$(FLAPPER) train --config configs/stage4-slow.toml --init-from runs/stage4a/checkpoints/iter_001900.safetensors --out runs/stage4
+	$(FLAPPER) train --config configs/stage4-slow.toml --init-from runs/stage4a/checkpoints/iter_001900.safetensors --out runs/stage4b
+	$(FLAPPER) train --config configs/stage4-wide.toml --init-from runs/stage4b/policy.safetensors --out runs/stage4c
+	$(FLAPPER) train --config configs/stage4-lift.toml --init-from runs/stage4c/checkpoints/iter_000500.safetensors --out runs/stage4
 
 evaluate: mujoco
 	@for r in $(REFERENCES); do \
