@@ -6,6 +6,7 @@ use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, SimFault, Vec3, quat_to_wxyz
 use flapper_task::ControlLoop;
 
 use flapper_files::decimals::{each_fixed, fixed};
+use flapper_files::write_csv_rows;
 
 use crate::OutputError;
 use crate::controller::FlightState;
@@ -155,14 +156,8 @@ impl FlightLog {
     /// velocity, airspeed, body rates, and for each joint its angle, commanded and applied target
     /// and torque, then the mechanical power. SI units, angles in radians.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
-        let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-        let mut writer = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
-        writer.write_record(Self::csv_header()).map_err(|e| error(&e))?;
-        for row in &self.rows {
-            writer.serialize(FlightCsvRow::of(row)).map_err(|e| error(&e))?;
-        }
-        let bytes = writer.into_inner().map_err(|e| error(&e))?;
-        flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
+        let rows = self.rows.iter().map(FlightCsvRow::of);
+        write_csv_rows(path, &Self::csv_header(), rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
     }
 
     /// The column names of [`FlightCsvRow`].

@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use flapper_files::decimals::{each_fixed, fixed};
+use flapper_files::write_csv_rows;
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS};
 
@@ -225,14 +226,8 @@ fn steps_csv_header() -> Vec<String> {
 
 /// One row per control step of every episode.
 pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
-    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
-    out.write_record(steps_csv_header()).map_err(|e| error(&e))?;
-    for s in results.iter().flat_map(|r| &r.steps) {
-        out.serialize(StepRow::of(s)).map_err(|e| error(&e))?;
-    }
-    let bytes = out.into_inner().map_err(|e| error(&e))?;
-    flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
+    let rows = results.iter().flat_map(|r| &r.steps).map(StepRow::of);
+    write_csv_rows(path, &steps_csv_header(), rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 /// Writes `path_3d.svg`, `path.svg` (top and side views), `error.svg` and `joints.svg` for the first
@@ -327,15 +322,10 @@ struct ObservationRow<'a> {
 /// `observations.csv`: `step`, the observation's `names`, then `action_q1`..`action_q5`, a row per
 /// control step of the recorded episode.
 pub fn write_observations_csv(record: &EpisodeRecord, names: &[String], path: &Path) -> Result<(), OutputError> {
-    let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
-    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
     let mut header = vec!["step".to_owned()];
     header.extend(names.iter().cloned());
     header.extend((1..=record.actions.first().map_or(N_ACTUATED_JOINTS, Vec::len)).map(|k| format!("action_q{k}")));
-    out.write_record(&header).map_err(|e| error(&e))?;
-    for (step, (observation, action)) in record.observations.iter().zip(&record.actions).enumerate() {
-        out.serialize(ObservationRow { step, observation, action }).map_err(|e| error(&e))?;
-    }
-    let bytes = out.into_inner().map_err(|e| error(&e))?;
-    flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
+    let rows = record.observations.iter().zip(&record.actions).enumerate();
+    let rows = rows.map(|(step, (observation, action))| ObservationRow { step, observation, action });
+    write_csv_rows(path, &header, rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
 }

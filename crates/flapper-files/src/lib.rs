@@ -1,6 +1,7 @@
 //! The one way flapper writes an output file: complete or absent, never half written. Every crate
 //! that writes files (learner checkpoints, plots, evaluation CSVs, the report) goes through it.
-//! [`decimals`] prints a CSV row's numbers at the precision its file keeps.
+//! [`write_csv_rows`] writes a CSV file of `Serialize` rows that way; [`decimals`] prints a row's
+//! numbers at the precision its file keeps.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -18,6 +19,18 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&temporary);
     }
     result
+}
+
+/// Writes `header`, then one record per row, to `path` as CSV, whole or not at all. A row's field may
+/// hold several columns (an array: each joint's angle), which is why the header is given, not derived.
+pub fn write_csv_rows<R: serde::Serialize>(path: &Path, header: &[String], rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
+    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+    out.write_record(header)?;
+    for row in rows {
+        out.serialize(row)?;
+    }
+    let bytes = out.into_inner().map_err(|e| e.into_error())?;
+    Ok(write_atomically(path, &bytes)?)
 }
 
 /// `serialize_with` helpers for `Serialize` CSV rows: a number, or each of several, at `DECIMALS`
