@@ -226,6 +226,45 @@ pub struct WindResult {
     pub name: String,
     #[serde(flatten)]
     pub tally: Tally,
+    /// The airspeeds the reference asks for in this wind.
+    pub needed_airspeed: NeededAirspeed,
+    /// Whether every needed airspeed lies inside the measured level-flight envelope (None when the
+    /// envelope sweep did not run or sustained no airspeed).
+    pub inside_envelope: Option<bool>,
+}
+
+/// The slowest and fastest airspeed (m/s) a reference asks for in a constant wind: the norm of its
+/// ground velocity minus the wind, over every step of the path. A wind whose slowest need lies below
+/// the robot's slowest sustained level airspeed asks for flight it cannot hold (a tailwind on a slow
+/// reference); weaving to shed ground speed would be the only way.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct NeededAirspeed {
+    pub slowest_mps: f64,
+    pub fastest_mps: f64,
+}
+
+/// The airspeeds `reference` asks for in the constant `wind_mps` (world frame).
+pub fn needed_airspeed(reference: &Reference, wind_mps: [f64; 3]) -> NeededAirspeed {
+    let wind = Vec3::from_array(wind_mps);
+    let points = reference.points();
+    if points.len() < 2 {
+        // A path that stands still: hovering in the wind.
+        let hover = wind.length();
+        return NeededAirspeed { slowest_mps: hover, fastest_mps: hover };
+    }
+    let airspeeds = points.windows(2).map(|pair| ((pair[1] - pair[0]) / reference.dt_s() - wind).length());
+    let (slowest_mps, fastest_mps) = airspeeds.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    NeededAirspeed { slowest_mps, fastest_mps }
+}
+
+impl NeededAirspeed {
+    /// Whether every needed airspeed lies in the envelope's sustained range (None without one).
+    pub fn inside(&self, envelope: &EnvelopeResult) -> Option<bool> {
+        match (envelope.slowest_sustained_mps, envelope.fastest_sustained_mps) {
+            (Some(lo), Some(hi)) => Some(self.slowest_mps >= lo && self.fastest_mps <= hi),
+            _ => None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -331,7 +370,8 @@ pub fn robustness(
                     let mut results = fly(&wind_randomization(wind))?;
                     let tally = Tally::of(&results);
                     progress(&format!("wind {}: {}/{}", wind_name(wind), tally.successes, tally.episodes));
-                    report.wind.push(WindResult { wind_mps: wind, name: wind_name(wind), tally });
+                    let needed_airspeed = needed_airspeed(&reference, wind);
+                    report.wind.push(WindResult { wind_mps: wind, name: wind_name(wind), tally, needed_airspeed, inside_envelope: None });
                     results.truncate(DRAWN_EPISODES);
                     wind_paths.push(results);
                 }
@@ -357,6 +397,11 @@ pub fn robustness(
                     speeds,
                 });
             }
+        }
+    }
+    if let Some(envelope) = &report.envelope {
+        for wind in &mut report.wind {
+            wind.inside_envelope = wind.needed_airspeed.inside(envelope);
         }
     }
     report.wall_time_s = began.elapsed().as_secs_f64();
@@ -494,7 +539,10 @@ fn draw_wind_paths(winds: &[WindResult], wind_paths: &[Vec<EpisodeResult>], refe
                 curves.push(Curve { label: "wind (1 m per m/s)".into(), points, color: flapper_plot::RGBColor(0, 0, 0), dashed: false });
             }
             panels.push(Panel {
-                title: format!("{}, {view} view: {}/{} completed", wind.name, wind.tally.successes, wind.tally.episodes),
+                title: format!(
+                    "{}, {view} view: {}/{} completed; needs {:.1}-{:.1} m/s airspeed",
+                    wind.name, wind.tally.successes, wind.tally.episodes, wind.needed_airspeed.slowest_mps, wind.needed_airspeed.fastest_mps
+                ),
                 x_label: "x (m)",
                 y_label: if b == 1 { "y (m)" } else { "z (m)" },
                 curves,

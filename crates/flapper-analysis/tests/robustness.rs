@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use flapper_analysis::robustness::{
-    FluidSeries, RobustnessSettings, Sweep, Tally, default_winds, fluid_randomization, nominal_randomization, robustness,
-    wind_randomization,
+    EnvelopeResult, FluidSeries, RobustnessSettings, Sweep, Tally, default_winds, fluid_randomization, needed_airspeed,
+    nominal_randomization, robustness, wind_randomization,
 };
 use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
@@ -107,4 +107,28 @@ fn the_default_winds_cover_the_axes_at_1_and_2_m_s_and_table_iii_s_corners() {
     assert_eq!(winds.len(), 1 + 12 + 8);
     assert!(winds.contains(&[-2.0, 0.0, 0.0]) && winds.contains(&[0.0, 1.0, 0.0]) && winds.contains(&[0.0, 0.0, -1.0]));
     assert!(winds.contains(&[2.0, -2.0, 1.5]) && winds.contains(&[-2.0, 2.0, -1.5]));
+}
+
+#[test]
+fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has_it() {
+    // Cruise: 30 s straight and level at 3.8 m/s along +x.
+    let cruise = named("cruise", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let still = needed_airspeed(&cruise, [0.0; 3]);
+    assert!(close(still.slowest_mps, 3.8) && close(still.fastest_mps, 3.8), "{still:?}");
+    let tail = needed_airspeed(&cruise, [1.0, 0.0, 0.0]);
+    assert!(close(tail.slowest_mps, 2.8) && close(tail.fastest_mps, 2.8), "{tail:?}");
+    let head = needed_airspeed(&cruise, [-2.0, 0.0, 0.0]);
+    assert!(close(head.slowest_mps, 5.8), "{head:?}");
+    let cross = needed_airspeed(&cruise, [0.0, 1.0, 0.0]);
+    assert!(close(cross.slowest_mps, (3.8f64 * 3.8 + 1.0).sqrt()), "{cross:?}");
+    // The longitudinal path climbs and dives: its needs spread.
+    let longitudinal = needed_airspeed(&named("longitudinal", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap(), [0.0; 3]);
+    assert!(longitudinal.slowest_mps >= 3.8 - 1e-9 && longitudinal.fastest_mps > 4.0, "{longitudinal:?}");
+
+    let envelope = |lo, hi| EnvelopeResult { speeds: Vec::new(), slowest_sustained_mps: lo, fastest_sustained_mps: hi };
+    assert_eq!(tail.inside(&envelope(Some(3.0), Some(8.0))), Some(false), "2.8 m/s is slower than 3 m/s");
+    assert_eq!(tail.inside(&envelope(Some(2.5), Some(8.0))), Some(true));
+    assert_eq!(head.inside(&envelope(Some(3.0), Some(5.5))), Some(false), "5.8 m/s is faster than 5.5 m/s");
+    assert_eq!(still.inside(&envelope(None, None)), None, "no envelope, no judgement");
 }

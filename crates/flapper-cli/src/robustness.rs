@@ -87,12 +87,28 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         }
     }
     if !report.wind.is_empty() {
-        println!("constant winds (world frame; the reference starts along +x):");
+        println!("constant winds (world frame; the reference starts along +x), and the airspeeds the reference then asks for:");
         for w in &report.wind {
+            let envelope = match w.inside_envelope {
+                Some(true) => "  inside the level envelope",
+                Some(false) => "  OUTSIDE the level envelope",
+                None => "",
+            };
             println!(
-                "  {:<26} ({:>4.1}, {:>4.1}, {:>4.1}) m/s  {:>3}/{}  RMS {:.3} m",
-                w.name, w.wind_mps[0], w.wind_mps[1], w.wind_mps[2], w.tally.successes, w.tally.episodes, w.tally.mean_rms_error_m
+                "  {:<26} ({:>4.1}, {:>4.1}, {:>4.1}) m/s  {:>3}/{}  RMS {:.3} m  needs {:.1}-{:.1} m/s{envelope}",
+                w.name,
+                w.wind_mps[0],
+                w.wind_mps[1],
+                w.wind_mps[2],
+                w.tally.successes,
+                w.tally.episodes,
+                w.tally.mean_rms_error_m,
+                w.needed_airspeed.slowest_mps,
+                w.needed_airspeed.fastest_mps
             );
+        }
+        if report.envelope.is_none() {
+            println!("  (add the envelope sweep, --sweeps ...,envelope, to see which needs the robot can fly)");
         }
     }
     if let Some(t) = &report.table_iii {

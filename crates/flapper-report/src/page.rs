@@ -136,7 +136,8 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
     if !e.is_null() {
         fig8.push(Block::Text(format!(
             "Level-flight airspeed envelope (15 s at each airspeed, >= 90% completed): {} to {} m/s. A reference flown at 3.8 m/s ground speed \
-             with a tailwind of w m/s needs 3.8 - w m/s of airspeed: below the envelope's slowest, the reference cannot be flown.",
+             with a tailwind of w m/s needs 3.8 - w m/s of airspeed: below the envelope's slowest, the reference cannot be flown straight. \
+             The tables give, per wind, the airspeeds the reference asks for and whether they lie inside the envelope.",
             fixed(&e["slowest_sustained_mps"], 1),
             fixed(&e["fastest_sustained_mps"], 1)
         )));
@@ -153,13 +154,30 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
                             format!("({}, {}, {})", fixed(&w["wind_mps"][0], 1), fixed(&w["wind_mps"][1], 1), fixed(&w["wind_mps"][2], 1)),
                             format!("{}/{}", w["successes"], w["episodes"]),
                             fixed(&w["mean_rms_error_m"], 3),
+                            format!("{}-{}", fixed(&w["needed_airspeed"]["slowest_mps"], 1), fixed(&w["needed_airspeed"]["fastest_mps"], 1)),
+                            // The envelope (level flight) does not depend on the reference: the
+                            // longitudinal run's serves the others.
+                            match (w["inside_envelope"].as_bool(), e["slowest_sustained_mps"].as_f64(), e["fastest_sustained_mps"].as_f64()) {
+                                (Some(true), ..) => "inside".to_owned(),
+                                (Some(false), ..) => "outside".to_owned(),
+                                (None, Some(lo), Some(hi)) => {
+                                    let needs = &w["needed_airspeed"];
+                                    let inside = needs["slowest_mps"].as_f64().is_some_and(|v| v >= lo)
+                                        && needs["fastest_mps"].as_f64().is_some_and(|v| v <= hi);
+                                    if inside { "inside" } else { "outside" }.to_owned()
+                                }
+                                (None, ..) => "not measured".to_owned(),
+                            },
                         ]
                     })
                     .collect()
             })
             .unwrap_or_default();
         fig8.push(Block::Text(format!("Constant winds on {r}:")));
-        fig8.push(Block::Table(["wind", "vector (m/s)", "success", "RMS error (m)"].map(String::from).to_vec(), rows));
+        fig8.push(Block::Table(
+            ["wind", "vector (m/s)", "success", "RMS error (m)", "airspeed needed (m/s)", "level envelope"].map(String::from).to_vec(),
+            rows,
+        ));
     }
     all.push(Section { title: "Fig. 8: tracking, and flight under wind".into(), blocks: fig8 });
 
