@@ -178,8 +178,9 @@ pub struct Tally {
 }
 
 impl Tally {
-    pub fn of(results: &[EpisodeResult]) -> Self {
-        let completed: Vec<&EpisodeResult> = results.iter().filter(|r| r.completed()).collect();
+    pub fn of<'a>(results: impl IntoIterator<Item = &'a EpisodeResult>) -> Self {
+        let results: Vec<&EpisodeResult> = results.into_iter().collect();
+        let completed: Vec<&EpisodeResult> = results.iter().copied().filter(|r| r.completed()).collect();
         let rms = completed.iter().map(|r| r.rms_error_m()).sum::<f64>() / completed.len() as f64;
         Self {
             episodes: results.len(),
@@ -288,6 +289,10 @@ pub struct RobustnessReport {
     pub most_sensitive_coefficient: Option<&'static str>,
     pub wind: Vec<WindResult>,
     pub table_iii: Option<Tally>,
+    /// Table III's episodes whose drawn wind keeps every airspeed the reference asks for inside the
+    /// level envelope (the others ask for flight the robot has not shown it can hold); None unless
+    /// both the Table III and the envelope sweeps ran and the envelope sustained some airspeed.
+    pub table_iii_inside_envelope: Option<Tally>,
     pub envelope: Option<EnvelopeResult>,
     pub wall_time_s: f64,
 }
@@ -349,10 +354,12 @@ pub fn robustness(
         most_sensitive_coefficient: None,
         wind: Vec::new(),
         table_iii: None,
+        table_iii_inside_envelope: None,
         envelope: None,
         wall_time_s: 0.0,
     };
     let mut wind_paths = Vec::new();
+    let mut table_iii_results = Vec::new();
     for sweep in &settings.sweeps {
         match sweep {
             Sweep::Fluid => {
@@ -377,7 +384,8 @@ pub fn robustness(
                 }
             }
             Sweep::TableIii => {
-                let tally = Tally::of(&fly(&table_iii_randomization())?);
+                table_iii_results = fly(&table_iii_randomization())?;
+                let tally = Tally::of(&table_iii_results);
                 progress(&format!("Table III: {}/{}", tally.successes, tally.episodes));
                 report.table_iii = Some(tally);
             }
@@ -402,6 +410,10 @@ pub fn robustness(
     if let Some(envelope) = &report.envelope {
         for wind in &mut report.wind {
             wind.inside_envelope = wind.needed_airspeed.inside(envelope);
+        }
+        let inside = |result: &&EpisodeResult| needed_airspeed(&reference, result.wind_mps.to_array()).inside(envelope);
+        if report.table_iii.is_some() && table_iii_results.iter().all(|r| inside(&r).is_some()) {
+            report.table_iii_inside_envelope = Some(Tally::of(table_iii_results.iter().filter(|r| inside(r) == Some(true))));
         }
     }
     report.wall_time_s = began.elapsed().as_secs_f64();

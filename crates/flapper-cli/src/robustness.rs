@@ -114,6 +114,16 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
     if let Some(t) = &report.table_iii {
         println!("everything in Table III randomized at once: {}/{} ({:.0}%), RMS {:.3} m", t.successes, t.episodes, 100.0 * t.success_rate, t.mean_rms_error_m);
     }
+    if let (Some(inside), Some(envelope)) = (&report.table_iii_inside_envelope, &report.envelope) {
+        println!(
+            "  of its episodes whose drawn wind keeps the reference's airspeeds inside the level envelope ({}-{} m/s): {}/{} ({:.0}%)",
+            envelope.slowest_sustained_mps.unwrap_or(f64::NAN),
+            envelope.fastest_sustained_mps.unwrap_or(f64::NAN),
+            inside.successes,
+            inside.episodes,
+            100.0 * inside.success_rate
+        );
+    }
     if let Some(envelope) = &report.envelope {
         let speeds: Vec<String> = envelope.speeds.iter().map(|(v, t)| format!("{v}: {}/{}", t.successes, t.episodes)).collect();
         println!("level flight, 15 s at each airspeed (m/s), completed: {}", speeds.join(", "));

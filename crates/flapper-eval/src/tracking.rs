@@ -50,6 +50,8 @@ pub struct TrackingStep {
 pub struct EpisodeResult {
     pub end: EpisodeEnd,
     pub steps: Vec<TrackingStep>,
+    /// The constant wind the episode flew in (world frame, m/s; zero unless randomized).
+    pub wind_mps: Vec3,
 }
 
 impl EpisodeResult {
@@ -266,7 +268,7 @@ fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize, mut record: Op
             absolute_power_w: work.absolute_j / control.control_period_s(),
         });
         if let Some(end) = result.end {
-            return EpisodeResult { end, steps };
+            return EpisodeResult { end, steps, wind_mps: env.drawn_dynamics().wind_mps };
         }
     }
 }

@@ -60,7 +60,7 @@ fn episode(end: EpisodeEnd, until_s: f64, error: impl Fn(f64) -> f64) -> Episode
             step_at(t, error(t), if inverted { 3.0 } else { 0.0 })
         })
         .collect();
-    EpisodeResult { end, steps }
+    EpisodeResult { end, steps, wind_mps: Vec3::ZERO }
 }
 
 #[test]

@@ -142,6 +142,13 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             fixed(&e["fastest_sustained_mps"], 1)
         )));
     }
+    let (table_iii, inside) = (&envelope["table_iii"], &envelope["table_iii_inside_envelope"]);
+    if !table_iii.is_null() && !inside.is_null() {
+        fig8.push(Block::Text(format!(
+            "Table III at once on longitudinal: {}/{} completed; of the episodes whose drawn wind keeps the reference's airspeeds inside the envelope, {}/{}.",
+            table_iii["successes"], table_iii["episodes"], inside["successes"], inside["episodes"]
+        )));
+    }
     for r in ["longitudinal", "lateral"] {
         let j = json(out, &format!("robustness/{r}/robustness.json"));
         let rows: Vec<Vec<String>> = j["wind"]
