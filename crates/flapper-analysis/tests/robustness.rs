@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use flapper_analysis::robustness::{
     EnvelopeResult, FluidSeries, RobustnessSettings, Sweep, Tally, default_winds, fluid_randomization, needed_airspeed,
-    nominal_randomization, robustness, wind_randomization,
+    nominal_randomization, robustness, table_iii_randomization, wind_randomization,
 };
 use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
@@ -131,4 +131,31 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
     assert_eq!(tail.inside(&envelope(Some(2.5), Some(8.0))), Some(true));
     assert_eq!(head.inside(&envelope(Some(3.0), Some(5.5))), Some(false), "5.8 m/s is faster than 5.5 m/s");
     assert_eq!(still.inside(&envelope(None, None)), None, "no envelope, no judgement");
+}
+
+#[test]
+fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() {
+    let robot = RobotModel::flapper().unwrap();
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
+    let (policy, task) = load_flight_policy(&path).unwrap();
+    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
+    let pilot = Pilot::Policy(Arc::new(policy));
+    let settings = RobustnessSettings { sweeps: vec![Sweep::TableIii, Sweep::Envelope], episodes: 6, seed: 2, ranges: vec![], winds: vec![] };
+    let (report, _) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {}).unwrap();
+    let envelope = report.envelope.as_ref().unwrap();
+    assert!(envelope.slowest_sustained_mps.is_some(), "the stage-3 policy sustains some level airspeed");
+    let inside = report.table_iii_inside_envelope.expect("both sweeps ran");
+
+    // The same episodes flown again: each recorded the wind it drew from Table III's box.
+    let results = evaluate_tracking_randomized(&robot, &pilot, &task, &table_iii_randomization(), reference.clone(), 6, 2).unwrap();
+    assert_same(&Tally::of(&results), report.table_iii.as_ref().unwrap(), "Table III");
+    for r in &results {
+        let w = r.wind_mps;
+        assert!(w != Vec3::ZERO && w.x.abs() <= 2.0 && w.y.abs() <= 2.0 && w.z.abs() <= 1.5, "{w:?}");
+    }
+    let allowed: Vec<_> = results.iter().filter(|r| needed_airspeed(&reference, r.wind_mps.to_array()).inside(envelope) == Some(true)).collect();
+    assert_eq!(inside.episodes, allowed.len());
+    assert_eq!(inside.successes, allowed.iter().filter(|r| r.completed()).count());
+    // Unrandomized episodes fly in still air.
+    assert!(evaluate_tracking(&robot, &pilot, &task, reference, 1, 2).unwrap()[0].wind_mps == Vec3::ZERO);
 }
