@@ -259,10 +259,11 @@ pub fn needed_airspeed(reference: &Reference, wind_mps: [f64; 3]) -> NeededAirsp
 }
 
 impl NeededAirspeed {
-    /// Whether every needed airspeed lies in the envelope's sustained range (None without one).
+    /// Whether every needed airspeed lies in the envelope's sustained range (None without one). A
+    /// top sustained at the fastest airspeed flown bounds nothing.
     pub fn inside(&self, envelope: &EnvelopeResult) -> Option<bool> {
         match (envelope.slowest_sustained_mps, envelope.fastest_sustained_mps) {
-            (Some(lo), Some(hi)) => Some(self.slowest_mps >= lo && self.fastest_mps <= hi),
+            (Some(lo), Some(hi)) => Some(self.slowest_mps >= lo && (self.fastest_mps <= hi || hi >= envelope.fastest_flown_mps)),
             _ => None,
         }
     }
@@ -276,6 +277,9 @@ pub struct EnvelopeResult {
     /// complete (None when none does).
     pub slowest_sustained_mps: Option<f64>,
     pub fastest_sustained_mps: Option<f64>,
+    /// The fastest airspeed flown: when it is also the fastest sustained, the envelope's top is not
+    /// known, only that it lies above.
+    pub fastest_flown_mps: f64,
 }
 
 /// `robustness.json`: every setting's figures, and the answers the paper gives.
@@ -402,6 +406,7 @@ pub fn robustness(
                 report.envelope = Some(EnvelopeResult {
                     slowest_sustained_mps: sustained.first().copied(),
                     fastest_sustained_mps: sustained.last().copied(),
+                    fastest_flown_mps: ENVELOPE_SPEEDS_MPS[ENVELOPE_SPEEDS_MPS.len() - 1],
                     speeds,
                 });
             }

@@ -126,10 +126,15 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
     let longitudinal = needed_airspeed(&named("longitudinal", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap(), [0.0; 3]);
     assert!(longitudinal.slowest_mps >= 3.8 - 1e-9 && longitudinal.fastest_mps > 4.0, "{longitudinal:?}");
 
-    let envelope = |lo, hi| EnvelopeResult { speeds: Vec::new(), slowest_sustained_mps: lo, fastest_sustained_mps: hi };
+    let envelope = |lo, hi| EnvelopeResult { speeds: Vec::new(), slowest_sustained_mps: lo, fastest_sustained_mps: hi, fastest_flown_mps: 8.0 };
     assert_eq!(tail.inside(&envelope(Some(3.0), Some(8.0))), Some(false), "2.8 m/s is slower than 3 m/s");
     assert_eq!(tail.inside(&envelope(Some(2.5), Some(8.0))), Some(true));
     assert_eq!(head.inside(&envelope(Some(3.0), Some(5.5))), Some(false), "5.8 m/s is faster than 5.5 m/s");
+    // Sustained up to the fastest airspeed flown: the top is unknown, so nothing is too fast.
+    let gale = needed_airspeed(&cruise, [-5.0, 0.0, 0.0]);
+    assert!(close(gale.fastest_mps, 8.8));
+    assert_eq!(gale.inside(&envelope(Some(3.0), Some(8.0))), Some(true));
+    assert_eq!(gale.inside(&envelope(Some(3.0), Some(7.5))), Some(false), "8.8 m/s is faster than 7.5 m/s, and 8 was flown");
     assert_eq!(still.inside(&envelope(None, None)), None, "no envelope, no judgement");
 }
 

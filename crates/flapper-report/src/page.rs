@@ -164,16 +164,10 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
                             format!("{}-{}", fixed(&w["needed_airspeed"]["slowest_mps"], 1), fixed(&w["needed_airspeed"]["fastest_mps"], 1)),
                             // The envelope (level flight) does not depend on the reference: the
                             // longitudinal run's serves the others.
-                            match (w["inside_envelope"].as_bool(), e["slowest_sustained_mps"].as_f64(), e["fastest_sustained_mps"].as_f64()) {
-                                (Some(true), ..) => "inside".to_owned(),
-                                (Some(false), ..) => "outside".to_owned(),
-                                (None, Some(lo), Some(hi)) => {
-                                    let needs = &w["needed_airspeed"];
-                                    let inside = needs["slowest_mps"].as_f64().is_some_and(|v| v >= lo)
-                                        && needs["fastest_mps"].as_f64().is_some_and(|v| v <= hi);
-                                    if inside { "inside" } else { "outside" }.to_owned()
-                                }
-                                (None, ..) => "not measured".to_owned(),
+                            match w["inside_envelope"].as_bool().or_else(|| inside_longitudinal_envelope(&w["needed_airspeed"], e)) {
+                                Some(true) => "inside".to_owned(),
+                                Some(false) => "outside".to_owned(),
+                                None => "not measured".to_owned(),
                             },
                         ]
                     })
@@ -418,4 +412,18 @@ pub fn write(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[Strin
     write_file(&index, html(out, &sections).as_bytes())?;
     write_file(&md, markdown(out, &sections).as_bytes())?;
     Ok((index, md))
+}
+
+/// Whether the airspeeds in `needs` (a `needed_airspeed` of robustness.json) lie inside `envelope` (the
+/// `envelope` of another reference's robustness.json: level flight does not depend on the reference).
+fn inside_longitudinal_envelope(needs: &Value, envelope: &Value) -> Option<bool> {
+    use flapper_analysis::robustness::{EnvelopeResult, NeededAirspeed};
+    let envelope = EnvelopeResult {
+        speeds: Vec::new(),
+        slowest_sustained_mps: envelope["slowest_sustained_mps"].as_f64(),
+        fastest_sustained_mps: envelope["fastest_sustained_mps"].as_f64(),
+        fastest_flown_mps: envelope["fastest_flown_mps"].as_f64()?,
+    };
+    let needs = NeededAirspeed { slowest_mps: needs["slowest_mps"].as_f64()?, fastest_mps: needs["fastest_mps"].as_f64()? };
+    needs.inside(&envelope)
 }
