@@ -416,9 +416,9 @@ pub fn robustness(
         for wind in &mut report.wind {
             wind.inside_envelope = wind.needed_airspeed.inside(envelope);
         }
-        let inside = |result: &&EpisodeResult| needed_airspeed(&reference, result.wind_mps.to_array()).inside(envelope);
-        if report.table_iii.is_some() && table_iii_results.iter().all(|r| inside(&r).is_some()) {
-            report.table_iii_inside_envelope = Some(Tally::of(table_iii_results.iter().filter(|r| inside(r) == Some(true))));
+        if report.table_iii.is_some() && envelope.slowest_sustained_mps.is_some() {
+            let inside = |result: &&EpisodeResult| needed_airspeed(&reference, result.wind_mps.to_array()).inside(envelope) == Some(true);
+            report.table_iii_inside_envelope = Some(Tally::of(table_iii_results.iter().filter(inside)));
         }
     }
     report.wall_time_s = began.elapsed().as_secs_f64();
@@ -457,7 +457,7 @@ pub fn write_robustness(
             successes: f.tally.successes,
             success_rate: f.tally.success_rate,
         });
-        write_csv(&path, rows).map_err(|e| fail(&path, &e))?;
+        flapper_files::write_csv_records(&path, rows).map_err(|e| fail(&path, &e))?;
         written.push(path);
         let svg = dir.join("robustness_fluid.svg");
         draw_fluid(report, &svg).map_err(|e| fail(&svg, &e))?;
@@ -473,22 +473,13 @@ pub fn write_robustness(
             successes: w.tally.successes,
             success_rate: w.tally.success_rate,
         });
-        write_csv(&path, rows).map_err(|e| fail(&path, &e))?;
+        flapper_files::write_csv_records(&path, rows).map_err(|e| fail(&path, &e))?;
         written.push(path);
         let svg = dir.join("robustness_wind.svg");
         draw_wind_paths(&report.wind, wind_paths, reference, &svg).map_err(|e| fail(&svg, &e))?;
         written.push(svg);
     }
     Ok(written)
-}
-
-fn write_csv<T: Serialize>(path: &Path, rows: impl Iterator<Item = T>) -> Result<(), String> {
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    for row in rows {
-        writer.serialize(row).map_err(|e| e.to_string())?;
-    }
-    let bytes = writer.into_inner().map_err(|e| e.to_string())?;
-    flapper_plot::write_atomically(path, &bytes).map_err(|e| e.to_string())
 }
 
 /// Fig. 9: success rate (%) against the randomization range, one curve per series.

@@ -312,25 +312,20 @@ pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFun
     flapper_plot::write_atomically(&json, text.as_bytes()).map_err(|e| fail(&json, &e))?;
 
     let io = dir.join("sysid_io.csv");
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    for r in records {
-        for k in 0..r.time_s.len() {
-            let [x, y, z] = &r.axes;
-            let row = IoRow {
-                time_s: r.time_s[k],
-                u_x: x.input[k],
-                u_y: y.input[k],
-                u_z: z.input[k],
-                y_x: x.output[k],
-                y_y: y.output[k],
-                y_z: z.output[k],
-                set: r.set,
-            };
-            writer.serialize(row).map_err(|e| fail(&io, &e))?;
-        }
-    }
-    let bytes = writer.into_inner().map_err(|e| fail(&io, &e))?;
-    flapper_plot::write_atomically(&io, &bytes).map_err(|e| fail(&io, &e))?;
+    let rows = records.iter().flat_map(|r| {
+        let [x, y, z] = &r.axes;
+        (0..r.time_s.len()).map(move |k| IoRow {
+            time_s: r.time_s[k],
+            u_x: x.input[k],
+            u_y: y.input[k],
+            u_z: z.input[k],
+            y_x: x.output[k],
+            y_y: y.output[k],
+            y_z: z.output[k],
+            set: r.set,
+        })
+    });
+    flapper_files::write_csv_records(&io, rows).map_err(|e| fail(&io, &e))?;
 
     let pole_zero = dir.join("pole_zero.svg");
     let maps: Vec<PoleZeroMap> = report

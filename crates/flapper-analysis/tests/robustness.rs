@@ -9,7 +9,9 @@ use flapper_analysis::robustness::{
 };
 use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
+use flapper_task::TaskConfig;
 use flapper_task::randomization::randomize;
+use flapper_task::reference::Reference;
 use flapper_task::reference::named::named;
 use flapper_eval::load_flight_policy;
 use rand::SeedableRng;
@@ -18,6 +20,15 @@ use rand::SeedableRng;
 fn assert_same(a: &Tally, b: &Tally, what: &str) {
     assert_eq!((a.episodes, a.successes, a.success_rate), (b.episodes, b.successes, b.success_rate), "{what}");
     assert_eq!(a.mean_rms_error_m.to_bits(), b.mean_rms_error_m.to_bits(), "{what}: RMS");
+}
+
+/// The shipped stage-3 policy and the sharp-turn reference: small runs of the sweeps.
+fn stage3_on_sharp_turn() -> (RobotModel, Pilot, TaskConfig, Arc<Reference>) {
+    let robot = RobotModel::flapper().unwrap();
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
+    let (policy, task) = load_flight_policy(&path).unwrap();
+    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
+    (robot, Pilot::Policy(Arc::new(policy)), task, reference)
 }
 
 #[test]
@@ -60,11 +71,7 @@ fn a_kutta_lift_setting_changes_only_kutta_lift_in_mujoco_and_the_next_draw_rest
 
 #[test]
 fn the_sweep_counts_the_evaluation_s_completed_episodes() {
-    let robot = RobotModel::flapper().unwrap();
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
-    let (policy, task) = load_flight_policy(&path).unwrap();
-    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
-    let pilot = Pilot::Policy(Arc::new(policy));
+    let (robot, pilot, task, reference) = stage3_on_sharp_turn();
     let settings = RobustnessSettings {
         sweeps: vec![Sweep::Fluid, Sweep::Wind],
         episodes: 6,
@@ -140,11 +147,7 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
 
 #[test]
 fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() {
-    let robot = RobotModel::flapper().unwrap();
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
-    let (policy, task) = load_flight_policy(&path).unwrap();
-    let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
-    let pilot = Pilot::Policy(Arc::new(policy));
+    let (robot, pilot, task, reference) = stage3_on_sharp_turn();
     let settings = RobustnessSettings { sweeps: vec![Sweep::TableIii, Sweep::Envelope], episodes: 6, seed: 2, ranges: vec![], winds: vec![] };
     let (report, _) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {}).unwrap();
     let envelope = report.envelope.as_ref().unwrap();

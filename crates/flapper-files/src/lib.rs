@@ -1,6 +1,6 @@
 //! The one way flapper writes an output file: complete or absent, never half written. Every crate
 //! that writes files (learner checkpoints, plots, evaluation CSVs, the report) goes through it.
-//! [`write_csv_rows`] writes a CSV file of `Serialize` rows that way; [`decimals`] prints a row's
+//! [`write_csv_rows`] and [`write_csv_records`] write a CSV file of `Serialize` rows that way; [`decimals`] prints a row's
 //! numbers at the precision its file keeps.
 
 use std::io::Write;
@@ -24,8 +24,20 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// Writes `header`, then one record per row, to `path` as CSV, whole or not at all. A row's field may
 /// hold several columns (an array: each joint's angle), which is why the header is given, not derived.
 pub fn write_csv_rows<R: serde::Serialize>(path: &Path, header: &[String], rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
-    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
-    out.write_record(header)?;
+    write_csv(path, Some(header), rows)
+}
+
+/// Writes rows of a flat `Serialize` struct to `path` as CSV, whole or not at all, under a header of
+/// the struct's field names (no rows, an empty file).
+pub fn write_csv_records<R: serde::Serialize>(path: &Path, rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
+    write_csv(path, None, rows)
+}
+
+fn write_csv<R: serde::Serialize>(path: &Path, header: Option<&[String]>, rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
+    let mut out = csv::WriterBuilder::new().has_headers(header.is_none()).from_writer(Vec::new());
+    if let Some(header) = header {
+        out.write_record(header)?;
+    }
     for row in rows {
         out.serialize(row)?;
     }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::{ReportError, write_file};
+use crate::ReportError;
 
 /// How a source's value is printed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -216,13 +216,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
 
 /// `paper_vs_flapper.csv`: claim, paper, flapper, verdict, sources (space-separated descriptions).
 pub fn write_csv(rows: &[Row], path: &Path) -> Result<(), ReportError> {
-    let fail = |e: &dyn std::fmt::Display| ReportError::Write { path: path.to_owned(), message: e.to_string() };
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        writer.serialize(r).map_err(|e| fail(&e))?;
-    }
-    let bytes = writer.into_inner().map_err(|e| fail(&e))?;
-    write_file(path, &bytes)
+    flapper_files::write_csv_records(path, rows).map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 #[cfg(test)]
