@@ -1,7 +1,7 @@
 # The README's commands. Each fetches MuJoCo (once) and builds what it needs.
 #   make demo    fly the final controller (policies/stage4) and the scripted baseline on the paper's
 #                aerobatic reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
-#   make test    run the whole test suite (what CI runs): Rust tests, then the Python binding's
+#   make test    run the whole test suite (what CI runs): formatting and lint checks, Rust tests, then the Python binding's
 #   make python  build the Python package `flapper` (crates/flapper-py) into the virtual environment
 #                .venv (made with $(PYTHON) if missing); `. .venv/bin/activate` then `import flapper`
 #   make train   train stages 1 to 4 from scratch into runs/stage1..4 (see README, "Learned flight")
@@ -11,7 +11,7 @@
 #   make report  regenerate the paper's figures and tables from the shipped policies: run/report/index.html
 #   make evaluate  fly POLICY (default: the final stage-4 policy) on every named reference, 100 randomized starts
 #                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
-.PHONY: demo test train bench baseline mujoco evaluate python python-bench report report-deps
+.PHONY: lint demo test train bench baseline mujoco evaluate python python-bench report report-deps
 
 POLICY ?= policies/stage4/policy.safetensors
 REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
@@ -25,10 +25,15 @@ mujoco:
 demo: mujoco
 	$(FLAPPER) eval --policy policies/stage4/policy.safetensors --reference aerobatic --episodes 100 --seed 1 --out run/demo
 
+# Layout and lints, as CI checks them (rustfmt.toml, [workspace.lints] in Cargo.toml).
+lint:
+	$(CARGO) fmt --all --check
+	$(CARGO) clippy --workspace --all-targets --quiet -- -D warnings
+
 PYTHON ?= python3
 VENV = .venv
 
-test: mujoco
+test: mujoco lint
 	$(CARGO) test --workspace
 	$(MAKE) python
 	$(VENV)/bin/python -m pytest -q crates/flapper-py/tests

@@ -113,11 +113,11 @@ pub fn validate(model: &TransferFunction, records: &[Record], settings: &FitSett
     let mut residuals = Vec::new();
     for record in records {
         let predicted = model.simulate(&record.input, settings.dt_s);
-        for k in skip..record.output.len() {
-            let e = record.output[k] - predicted[k];
+        for (&output, &prediction) in record.output.iter().zip(&predicted).skip(skip) {
+            let e = output - prediction;
             error2 += e * e;
             count += 1;
-            measured.push(record.output[k]);
+            measured.push(output);
             residuals.push(e);
         }
     }

@@ -24,11 +24,15 @@ pub mod sysid;
 pub enum AnalysisError {
     #[error(transparent)]
     Model(#[from] flapper_sim::ModelError),
-    #[error("the policy did not fly identification record {record} (seed {seed}): it ended '{end}' at {time_s:.1} s of {length_s:.0} s; it cannot cruise at 3.8 m/s with its target perturbed by {amplitude_m} m")]
+    #[error(
+        "the policy did not fly identification record {record} (seed {seed}): it ended '{end}' at {time_s:.1} s of {length_s:.0} s; it cannot cruise at 3.8 m/s with its target perturbed by {amplitude_m} m"
+    )]
     RecordFailed { record: usize, seed: u64, end: &'static str, time_s: f64, length_s: f64, amplitude_m: f64 },
     #[error("the policy cannot fly the {what}: it ended '{end}' at {time_s:.1} s")]
     FlightFailed { what: String, end: &'static str, time_s: f64 },
-    #[error("the identification is set up for the paper's 50 Hz control rate (0.02 s); this model and task step every {period_s} s")]
+    #[error(
+        "the identification is set up for the paper's 50 Hz control rate (0.02 s); this model and task step every {period_s} s"
+    )]
     ControlRate { period_s: f64 },
     #[error("the least-squares fit failed (too little data, or a constant input)")]
     FitFailed,

@@ -19,7 +19,8 @@ use serde::Serialize;
 use crate::AnalysisError;
 
 /// The longitudinal reference's segments: name, start and end (s).
-pub const SEGMENTS: [(&str, f64, f64); 4] = [("cruise", 0.0, 6.0), ("climb", 6.0, 12.0), ("glide", 12.0, 18.0), ("dive", 18.0, 24.0)];
+pub const SEGMENTS: [(&str, f64, f64); 4] =
+    [("cruise", 0.0, 6.0), ("climb", 6.0, 12.0), ("glide", 12.0, 18.0), ("dive", 18.0, 24.0)];
 /// A segment counts as gliding when its flap amplitude is below this fraction of the cruise's.
 pub const GLIDE_AMPLITUDE_FRACTION: f64 = 0.25;
 /// The launch transient left out of the first segment (s).
@@ -47,8 +48,14 @@ pub struct ModesReport {
     pub verdict: String,
 }
 
-pub fn flight_modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(ModesReport, Vec<PathBuf>), AnalysisError> {
-    let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+pub fn flight_modes(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+    dir: &Path,
+) -> Result<(ModesReport, Vec<PathBuf>), AnalysisError> {
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -59,15 +66,21 @@ pub fn flight_modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskCon
     let flight = evaluate_tracking(robot, &Pilot::Policy(policy), &exact, reference, 1, 1)?.remove(0);
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);
-        return Err(AnalysisError::FlightFailed { what: "longitudinal reference".into(), end: flight.end.name(), time_s: at });
+        return Err(AnalysisError::FlightFailed {
+            what: "longitudinal reference".into(),
+            end: flight.end.name(),
+            time_s: at,
+        });
     }
     let flap = ActuatedJoint::FlapLeft.index();
     let mut segments: Vec<SegmentFigures> = SEGMENTS
         .iter()
         .map(|&(segment, start_s, end_s)| {
-            let inside: Vec<_> = flight.steps.iter().filter(|s| s.time_s >= start_s.max(SETTLE_S) && s.time_s < end_s).collect();
+            let inside: Vec<_> =
+                flight.steps.iter().filter(|s| s.time_s >= start_s.max(SETTLE_S) && s.time_s < end_s).collect();
             let angles: Vec<f64> = inside.iter().map(|s| s.joint_positions_rad[flap]).collect();
-            let (lo, hi) = angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+            let (lo, hi) =
+                angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
             let found = fundamental(&angles, 50.0);
             let n = inside.len().max(1) as f64;
             SegmentFigures {
@@ -101,24 +114,52 @@ pub fn flight_modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskCon
     };
     let report = ModesReport { segments, verdict };
     let json = dir.join("modes.json");
-    flapper_plot::write_atomically(&json, serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes()).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(
+        &json,
+        serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes(),
+    )
+    .map_err(|e| fail(&json, &e))?;
     let svg = dir.join("modes.svg");
     let boundaries = |lo: f64, hi: f64| -> Vec<Curve> {
         SEGMENTS[1..]
             .iter()
-            .map(|&(name, start, _)| Curve { label: format!("{name} from {start} s"), points: vec![(start, lo), (start, hi)], color: COLORS[4], dashed: true })
+            .map(|&(name, start, _)| Curve {
+                label: format!("{name} from {start} s"),
+                points: vec![(start, lo), (start, hi)],
+                color: COLORS[4],
+                dashed: true,
+            })
             .collect()
     };
-    let flap_points: Vec<(f64, f64)> = flight.steps.iter().map(|s| (s.time_s, s.joint_positions_rad[flap].to_degrees())).collect();
+    let flap_points: Vec<(f64, f64)> =
+        flight.steps.iter().map(|s| (s.time_s, s.joint_positions_rad[flap].to_degrees())).collect();
     let power_points: Vec<(f64, f64)> = flight.steps.iter().map(|s| (s.time_s, s.absolute_power_w)).collect();
     let max_power = power_points.iter().map(|p| p.1).fold(0.0, f64::max);
-    let mut flap_curves = vec![Curve { label: "flap_left".into(), points: flap_points, color: COLORS[0], dashed: false }];
+    let mut flap_curves =
+        vec![Curve { label: "flap_left".into(), points: flap_points, color: COLORS[0], dashed: false }];
     flap_curves.extend(boundaries(-60.0, 60.0));
-    let mut power_curves = vec![Curve { label: "absolute mechanical power".into(), points: power_points, color: COLORS[1], dashed: false }];
+    let mut power_curves = vec![Curve {
+        label: "absolute mechanical power".into(),
+        points: power_points,
+        color: COLORS[1],
+        dashed: false,
+    }];
     power_curves.extend(boundaries(0.0, max_power));
     let panels = [
-        Panel { title: "longitudinal reference: flap angle (cruise | climb | glide | dive)".into(), x_label: "time (s)", y_label: "deg", curves: flap_curves, equal_aspect: false },
-        Panel { title: "mechanical power".into(), x_label: "time (s)", y_label: "W", curves: power_curves, equal_aspect: false },
+        Panel {
+            title: "longitudinal reference: flap angle (cruise | climb | glide | dive)".into(),
+            x_label: "time (s)",
+            y_label: "deg",
+            curves: flap_curves,
+            equal_aspect: false,
+        },
+        Panel {
+            title: "mechanical power".into(),
+            x_label: "time (s)",
+            y_label: "W",
+            curves: power_curves,
+            equal_aspect: false,
+        },
     ];
     flapper_plot::draw(&svg, (1200, 800), &panels, (2, 1)).map_err(|e| fail(&svg, &e))?;
     Ok((report, vec![json, svg]))

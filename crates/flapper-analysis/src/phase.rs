@@ -60,7 +60,8 @@ pub struct JointTrace {
 impl JointTrace {
     pub fn of(flight: &EpisodeResult, joint: ActuatedJoint) -> Self {
         let settled = flight.steps.iter().filter(|s| s.time_s >= SETTLE_S);
-        let (angle_rad, velocity_radps) = settled.map(|s| (s.joint_positions_rad[joint.index()], s.joint_velocities_radps[joint.index()])).unzip();
+        let (angle_rad, velocity_radps) =
+            settled.map(|s| (s.joint_positions_rad[joint.index()], s.joint_velocities_radps[joint.index()])).unzip();
         Self { angle_rad, velocity_radps }
     }
 
@@ -86,8 +87,10 @@ impl JointTrace {
         let mean = self.mean_angle_rad();
         let a = &self.angle_rad;
         // Crossing times in samples, interpolated between the samples on either side.
-        let crossings: Vec<f64> =
-            (1..a.len()).filter(|&k| a[k - 1] < mean && a[k] >= mean).map(|k| (k - 1) as f64 + (mean - a[k - 1]) / (a[k] - a[k - 1])).collect();
+        let crossings: Vec<f64> = (1..a.len())
+            .filter(|&k| a[k - 1] < mean && a[k] >= mean)
+            .map(|k| (k - 1) as f64 + (mean - a[k - 1]) / (a[k] - a[k - 1]))
+            .collect();
         let cycles: Vec<Vec<(f64, f64)>> = crossings
             .windows(2)
             .filter(|w| w[1] - w[0] >= 4.0)
@@ -109,11 +112,14 @@ impl JointTrace {
         let mean_cycle: Vec<(f64, f64)> = (0..PHASE_POINTS)
             .map(|p| (cycles.iter().map(|c| c[p].0).sum::<f64>() / n, cycles.iter().map(|c| c[p].1).sum::<f64>() / n))
             .collect();
-        let range = |f: fn(&(f64, f64)) -> f64| 2.0 * half_range(&mean_cycle.iter().map(f).collect::<Vec<_>>()).max(1e-9);
+        let range =
+            |f: fn(&(f64, f64)) -> f64| 2.0 * half_range(&mean_cycle.iter().map(f).collect::<Vec<_>>()).max(1e-9);
         let (ra, rv) = (range(|p| p.0), range(|p| p.1));
         let squares: f64 = cycles
             .iter()
-            .flat_map(|c| c.iter().zip(&mean_cycle).map(|(p, m)| (((p.0 - m.0) / ra).powi(2) + ((p.1 - m.1) / rv).powi(2)) / 2.0))
+            .flat_map(|c| {
+                c.iter().zip(&mean_cycle).map(|(p, m)| (((p.0 - m.0) / ra).powi(2) + ((p.1 - m.1) / rv).powi(2)) / 2.0)
+            })
             .sum();
         100.0 * (squares / (n * PHASE_POINTS as f64)).sqrt()
     }
@@ -182,13 +188,18 @@ pub fn phase_portraits(
     forward_speed_mps: f64,
     dir: &Path,
 ) -> Result<(PhaseReport, Vec<PathBuf>), AnalysisError> {
-    let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let cruise = fly_command(robot, &policy, task, forward_speed_mps, 0.0, 0.0, FLIGHT_S)?;
     let climb = fly_command(robot, &policy, task, forward_speed_mps, CLIMB_RATE_MPS, 0.0, FLIGHT_S)?;
     for (name, flight) in [("cruise", &cruise), ("climb", &climb)] {
         if !flight.completed() {
             let at = flight.steps.last().map_or(0.0, |s| s.time_s);
-            return Err(AnalysisError::FlightFailed { what: format!("{name} at {forward_speed_mps} m/s"), end: flight.end.name(), time_s: at });
+            return Err(AnalysisError::FlightFailed {
+                what: format!("{name} at {forward_speed_mps} m/s"),
+                end: flight.end.name(),
+                time_s: at,
+            });
         }
     }
     let turn = fly_command(robot, &policy, task, flapper_sim::CRUISE_SPEED_MPS, 0.0, TURN_RATE_DEGPS, FLIGHT_S)?;
@@ -216,32 +227,52 @@ pub fn phase_portraits(
                 lf.velocity_amplitude_radps().to_degrees(),
                 cf.velocity_amplitude_radps().to_degrees()
             ),
-            confirmed: lf.amplitude_rad() > cf.amplitude_rad() && lf.velocity_amplitude_radps() > cf.velocity_amplitude_radps(),
+            confirmed: lf.amplitude_rad() > cf.amplitude_rad()
+                && lf.velocity_amplitude_radps() > cf.velocity_amplitude_radps(),
         },
         Claim {
             claim: "climbing shifts the mean wing pitch negative (leading edge up)".into(),
-            ours: format!("mean wing pitch {:.1} vs {:.1} deg (climb vs cruise)", lp.mean_angle_rad().to_degrees(), cp.mean_angle_rad().to_degrees()),
+            ours: format!(
+                "mean wing pitch {:.1} vs {:.1} deg (climb vs cruise)",
+                lp.mean_angle_rad().to_degrees(),
+                cp.mean_angle_rad().to_degrees()
+            ),
             confirmed: lp.mean_angle_rad() < cp.mean_angle_rad(),
         },
     ];
     let mut closure = vec![("cruise flap", &cf), ("cruise pitch", &cp), ("climb flap", &lf), ("climb pitch", &lp)];
     let turn_traces = turn_skipped_because.is_none().then(|| {
-        [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::FlapRight, ActuatedJoint::PitchRight].map(|j| JointTrace::of(&turn, j))
+        [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::FlapRight, ActuatedJoint::PitchRight]
+            .map(|j| JointTrace::of(&turn, j))
     });
     if let Some([tlf, tlp, trf, trp]) = &turn_traces {
         claims.push(Claim {
             claim: "turning left, the right wing's mean flap is higher than the left's".into(),
-            ours: format!("mean flap right {:.1} vs left {:.1} deg", trf.mean_angle_rad().to_degrees(), tlf.mean_angle_rad().to_degrees()),
+            ours: format!(
+                "mean flap right {:.1} vs left {:.1} deg",
+                trf.mean_angle_rad().to_degrees(),
+                tlf.mean_angle_rad().to_degrees()
+            ),
             confirmed: trf.mean_angle_rad() > tlf.mean_angle_rad(),
         });
         claims.push(Claim {
             claim: "turning left, the right wing pitches up (more negative mean pitch) than the left".into(),
-            ours: format!("mean pitch right {:.1} vs left {:.1} deg", trp.mean_angle_rad().to_degrees(), tlp.mean_angle_rad().to_degrees()),
+            ours: format!(
+                "mean pitch right {:.1} vs left {:.1} deg",
+                trp.mean_angle_rad().to_degrees(),
+                tlp.mean_angle_rad().to_degrees()
+            ),
             confirmed: trp.mean_angle_rad() < tlp.mean_angle_rad(),
         });
-        closure.extend([("turn left flap", tlf), ("turn left pitch", tlp), ("turn right flap", trf), ("turn right pitch", trp)]);
+        closure.extend([
+            ("turn left flap", tlf),
+            ("turn left pitch", tlp),
+            ("turn right flap", trf),
+            ("turn right pitch", trp),
+        ]);
     }
-    let spreads: Vec<String> = closure.iter().map(|(name, t)| format!("{name} {:.1}%", t.orbit_spread_percent())).collect();
+    let spreads: Vec<String> =
+        closure.iter().map(|(name, t)| format!("{name} {:.1}%", t.orbit_spread_percent())).collect();
     claims.insert(
         0,
         Claim {
@@ -251,30 +282,48 @@ pub fn phase_portraits(
         },
     );
     let report = PhaseReport {
-        forward_speed_mps: forward_speed_mps,
+        forward_speed_mps,
         climb_rate_mps: CLIMB_RATE_MPS,
         turn_rate_degps: TURN_RATE_DEGPS,
         cruise: [("flap_right", OrbitFigures::of(&cf)), ("pitch_right", OrbitFigures::of(&cp))],
         climb: [("flap_right", OrbitFigures::of(&lf)), ("pitch_right", OrbitFigures::of(&lp))],
         turn_left: turn_traces.as_ref().map(|[a, b, c, d]| {
-            [("flap_left", OrbitFigures::of(a)), ("pitch_left", OrbitFigures::of(b)), ("flap_right", OrbitFigures::of(c)), ("pitch_right", OrbitFigures::of(d))]
+            [
+                ("flap_left", OrbitFigures::of(a)),
+                ("pitch_left", OrbitFigures::of(b)),
+                ("flap_right", OrbitFigures::of(c)),
+                ("pitch_right", OrbitFigures::of(d)),
+            ]
         }),
         turn_skipped_because,
         claims,
     };
     let json = dir.join("phase.json");
-    flapper_plot::write_atomically(&json, serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes()).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(
+        &json,
+        serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes(),
+    )
+    .map_err(|e| fail(&json, &e))?;
     let orbit = |label: &str, t: &JointTrace, k: usize| Curve {
         label: label.to_string(),
         points: t.angle_rad.iter().zip(&t.velocity_radps).map(|(a, v)| (a.to_degrees(), v.to_degrees())).collect(),
         color: COLORS[k],
         dashed: false,
     };
-    let panel = |title: String, curves| Panel { title, x_label: "angle (deg)", y_label: "angular velocity (deg/s)", curves, equal_aspect: false };
+    let panel = |title: String, curves| Panel {
+        title,
+        x_label: "angle (deg)",
+        y_label: "angular velocity (deg/s)",
+        curves,
+        equal_aspect: false,
+    };
     let mut written = vec![json];
     let climb_svg = dir.join("phase_climb.svg");
     let panels = [
-        panel(format!("right wing flap, cruise vs climb at {forward_speed_mps} m/s"), vec![orbit("cruise", &cf, 0), orbit("climb", &lf, 1)]),
+        panel(
+            format!("right wing flap, cruise vs climb at {forward_speed_mps} m/s"),
+            vec![orbit("cruise", &cf, 0), orbit("climb", &lf, 1)],
+        ),
         panel("right wing pitch, cruise vs climb".into(), vec![orbit("cruise", &cp, 0), orbit("climb", &lp, 1)]),
     ];
     flapper_plot::draw(&climb_svg, (1200, 520), &panels, (1, 2)).map_err(|e| fail(&climb_svg, &e))?;
@@ -282,8 +331,14 @@ pub fn phase_portraits(
     if let Some([tlf, tlp, trf, trp]) = &turn_traces {
         let turn_svg = dir.join("phase_turn.svg");
         let panels = [
-            panel(format!("flap while turning left at {TURN_RATE_DEGPS} deg/s"), vec![orbit("left wing", tlf, 0), orbit("right wing", trf, 1)]),
-            panel("wing pitch while turning left".into(), vec![orbit("left wing", tlp, 0), orbit("right wing", trp, 1)]),
+            panel(
+                format!("flap while turning left at {TURN_RATE_DEGPS} deg/s"),
+                vec![orbit("left wing", tlf, 0), orbit("right wing", trf, 1)],
+            ),
+            panel(
+                "wing pitch while turning left".into(),
+                vec![orbit("left wing", tlp, 0), orbit("right wing", trp, 1)],
+            ),
         ];
         flapper_plot::draw(&turn_svg, (1200, 520), &panels, (1, 2)).map_err(|e| fail(&turn_svg, &e))?;
         written.push(turn_svg);

@@ -140,7 +140,9 @@ pub fn table_iii_randomization() -> RandomizationConfig {
 pub fn default_winds() -> Vec<[f64; 3]> {
     let mut winds = vec![[0.0; 3]];
     for speed in [1.0, 2.0] {
-        for direction in [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]] {
+        for direction in
+            [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
+        {
             winds.push(direction.map(|d: f64| d * speed));
         }
     }
@@ -263,7 +265,9 @@ impl NeededAirspeed {
     /// top sustained at the fastest airspeed flown bounds nothing.
     pub fn inside(&self, envelope: &EnvelopeResult) -> Option<bool> {
         match (envelope.slowest_sustained_mps, envelope.fastest_sustained_mps) {
-            (Some(lo), Some(hi)) => Some(self.slowest_mps >= lo && (self.fastest_mps <= hi || hi >= envelope.fastest_flown_mps)),
+            (Some(lo), Some(hi)) => {
+                Some(self.slowest_mps >= lo && (self.fastest_mps <= hi || hi >= envelope.fastest_flown_mps))
+            }
             _ => None,
         }
     }
@@ -328,7 +332,12 @@ impl RobustnessSettings {
 
 /// A straight and level reference at `speed_mps` from 10 m up, heading +x.
 fn level_reference(speed_mps: f64, dt_s: f64, lookahead_s: f64) -> Reference {
-    let piece = |duration_s| Piece::Command { forward_speed_mps: speed_mps, vertical_speed_mps: 0.0, yaw_rate_radps: 0.0, duration_s };
+    let piece = |duration_s| Piece::Command {
+        forward_speed_mps: speed_mps,
+        vertical_speed_mps: 0.0,
+        yaw_rate_radps: 0.0,
+        duration_s,
+    };
     // As the named references: the lookahead's worth of the same flight after the end.
     let pieces = [piece(ENVELOPE_DURATION_S), piece(lookahead_s)];
     build(&format!("level at {speed_mps} m/s"), &pieces, Vec3::new(0.0, 0.0, 10.0), 0.0, dt_s)
@@ -370,7 +379,14 @@ pub fn robustness(
                 for series in FluidSeries::ALL {
                     for &range in &settings.ranges {
                         let tally = Tally::of(&fly(&fluid_randomization(series, range))?);
-                        progress(&format!("{} x[{:.1}, {:.1}]: {}/{}", series.name(), 1.0 - range, 1.0 + range, tally.successes, tally.episodes));
+                        progress(&format!(
+                            "{} x[{:.1}, {:.1}]: {}/{}",
+                            series.name(),
+                            1.0 - range,
+                            1.0 + range,
+                            tally.successes,
+                            tally.episodes
+                        ));
                         report.fluid.push(FluidResult { coefficient: series.name(), range, tally });
                     }
                 }
@@ -382,7 +398,13 @@ pub fn robustness(
                     let tally = Tally::of(&results);
                     progress(&format!("wind {}: {}/{}", wind_name(wind), tally.successes, tally.episodes));
                     let needed_airspeed = needed_airspeed(&reference, wind);
-                    report.wind.push(WindResult { wind_mps: wind, name: wind_name(wind), tally, needed_airspeed, inside_envelope: None });
+                    report.wind.push(WindResult {
+                        wind_mps: wind,
+                        name: wind_name(wind),
+                        tally,
+                        needed_airspeed,
+                        inside_envelope: None,
+                    });
                     results.truncate(DRAWN_EPISODES);
                     wind_paths.push(results);
                 }
@@ -398,11 +420,19 @@ pub fn robustness(
                 let mut speeds = Vec::new();
                 for speed in ENVELOPE_SPEEDS_MPS {
                     let level = Arc::new(level_reference(speed, reference.dt_s(), lookahead_s));
-                    let tally = Tally::of(&evaluate_tracking(robot, pilot, task, level, episodes.min(ENVELOPE_EPISODES), seed)?);
+                    let tally = Tally::of(&evaluate_tracking(
+                        robot,
+                        pilot,
+                        task,
+                        level,
+                        episodes.min(ENVELOPE_EPISODES),
+                        seed,
+                    )?);
                     progress(&format!("level at {speed} m/s: {}/{}", tally.successes, tally.episodes));
                     speeds.push((speed, tally));
                 }
-                let sustained: Vec<f64> = speeds.iter().filter(|(_, t)| t.success_rate >= SUSTAINABLE_SUCCESS).map(|(v, _)| *v).collect();
+                let sustained: Vec<f64> =
+                    speeds.iter().filter(|(_, t)| t.success_rate >= SUSTAINABLE_SUCCESS).map(|(v, _)| *v).collect();
                 report.envelope = Some(EnvelopeResult {
                     slowest_sustained_mps: sustained.first().copied(),
                     fastest_sustained_mps: sustained.last().copied(),
@@ -417,7 +447,9 @@ pub fn robustness(
             wind.inside_envelope = wind.needed_airspeed.inside(envelope);
         }
         if report.table_iii.is_some() && envelope.slowest_sustained_mps.is_some() {
-            let inside = |result: &&EpisodeResult| needed_airspeed(&reference, result.wind_mps.to_array()).inside(envelope) == Some(true);
+            let inside = |result: &&EpisodeResult| {
+                needed_airspeed(&reference, result.wind_mps.to_array()).inside(envelope) == Some(true)
+            };
             report.table_iii_inside_envelope = Some(Tally::of(table_iii_results.iter().filter(inside)));
         }
     }
@@ -443,10 +475,15 @@ pub fn write_robustness(
     reference: &Reference,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, AnalysisError> {
-    let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let mut written = Vec::new();
     let json = dir.join("robustness.json");
-    flapper_plot::write_atomically(&json, serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?.as_bytes()).map_err(|e| fail(&json, &e))?;
+    flapper_plot::write_atomically(
+        &json,
+        serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?.as_bytes(),
+    )
+    .map_err(|e| fail(&json, &e))?;
     written.push(json);
     if !report.fluid.is_empty() {
         let path = dir.join("robustness_fluid.csv");
@@ -490,13 +527,21 @@ fn draw_fluid(report: &RobustnessReport, path: &Path) -> Result<(), String> {
         .zip(colors)
         .map(|(series, color)| Curve {
             label: series.name().to_owned(),
-            points: report.fluid.iter().filter(|f| f.coefficient == series.name()).map(|f| (f.range, 100.0 * f.tally.success_rate)).collect(),
+            points: report
+                .fluid
+                .iter()
+                .filter(|f| f.coefficient == series.name())
+                .map(|f| (f.range, 100.0 * f.tally.success_rate))
+                .collect(),
             color,
             dashed: *series == FluidSeries::All,
         })
         .collect();
     let panel = Panel {
-        title: format!("{}: success over {} episodes per point, coefficients x[1 - r, 1 + r]", report.reference, report.episodes),
+        title: format!(
+            "{}: success over {} episodes per point, coefficients x[1 - r, 1 + r]",
+            report.reference, report.episodes
+        ),
         x_label: "randomization range r",
         y_label: "success rate (%)",
         curves,
@@ -507,7 +552,12 @@ fn draw_fluid(report: &RobustnessReport, path: &Path) -> Result<(), String> {
 
 /// Fig. 8: top and side views of the first episodes under each 2 m/s axis wind (and still air), the
 /// reference dashed and the wind drawn as an arrow from the start (1 m per m/s).
-fn draw_wind_paths(winds: &[WindResult], wind_paths: &[Vec<EpisodeResult>], reference: &Reference, path: &Path) -> Result<(), String> {
+fn draw_wind_paths(
+    winds: &[WindResult],
+    wind_paths: &[Vec<EpisodeResult>],
+    reference: &Reference,
+    path: &Path,
+) -> Result<(), String> {
     let shown: Vec<(&WindResult, &Vec<EpisodeResult>)> = winds
         .iter()
         .zip(wind_paths)
@@ -526,10 +576,18 @@ fn draw_wind_paths(winds: &[WindResult], wind_paths: &[Vec<EpisodeResult>], refe
                 let c = [p.x, p.y, p.z];
                 (c[a], c[b])
             };
-            let mut curves = vec![Curve { label: "reference".into(), points: reference_points.iter().map(|p| pick(*p)).collect(), color: COLORS[4], dashed: true }];
+            let mut curves = vec![Curve {
+                label: "reference".into(),
+                points: reference_points.iter().map(|p| pick(*p)).collect(),
+                color: COLORS[4],
+                dashed: true,
+            }];
             for (k, result) in results.iter().enumerate() {
                 curves.push(Curve {
-                    label: format!("episode {k} ({})", if result.completed() { "completed" } else { result.end.name() }),
+                    label: format!(
+                        "episode {k} ({})",
+                        if result.completed() { "completed" } else { result.end.name() }
+                    ),
                     points: result.steps.iter().map(|s| pick(s.position_m)).collect(),
                     color: COLORS[k % 4],
                     dashed: false,
@@ -544,12 +602,21 @@ fn draw_wind_paths(winds: &[WindResult], wind_paths: &[Vec<EpisodeResult>], refe
                 let (dx, dy) = (tx - sx, ty - sy);
                 let barb = |sign: f64| (tx - 0.25 * (dx - sign * dy), ty - 0.25 * (dy + sign * dx));
                 let points = vec![(sx, sy), (tx, ty), barb(1.0), (tx, ty), barb(-1.0)];
-                curves.push(Curve { label: "wind (1 m per m/s)".into(), points, color: flapper_plot::RGBColor(0, 0, 0), dashed: false });
+                curves.push(Curve {
+                    label: "wind (1 m per m/s)".into(),
+                    points,
+                    color: flapper_plot::RGBColor(0, 0, 0),
+                    dashed: false,
+                });
             }
             panels.push(Panel {
                 title: format!(
                     "{}, {view} view: {}/{} completed; needs {:.1}-{:.1} m/s airspeed",
-                    wind.name, wind.tally.successes, wind.tally.episodes, wind.needed_airspeed.slowest_mps, wind.needed_airspeed.fastest_mps
+                    wind.name,
+                    wind.tally.successes,
+                    wind.tally.episodes,
+                    wind.needed_airspeed.slowest_mps,
+                    wind.needed_airspeed.fastest_mps
                 ),
                 x_label: "x (m)",
                 y_label: if b == 1 { "y (m)" } else { "z (m)" },

@@ -22,12 +22,11 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::fit::{FitSettings, Record, Validation, fit_common_denominator, validate};
 use crate::AnalysisError;
+use crate::fit::{FitSettings, Record, Validation, fit_common_denominator, validate};
 use crate::linear_system::TransferFunction;
 
 pub const AXES: [&str; 3] = ["x", "y", "z"];
-
 
 /// The experiment's settings; the defaults are what `flapper sysid` runs.
 #[derive(Debug, Clone, Serialize)]
@@ -144,7 +143,12 @@ pub struct FlownRecord {
 }
 
 /// Flies the identification and validation records with `policy` on its `task` from an exact start.
-pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, s: &SysidSettings) -> Result<Vec<FlownRecord>, AnalysisError> {
+pub fn fly_records(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+    s: &SysidSettings,
+) -> Result<Vec<FlownRecord>, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -165,10 +169,15 @@ pub fn fly_records(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConf
     plan.par_iter()
         .map(|&(record, set, seed)| {
             let total = steps + lookahead + 2;
-            let perturbation: Vec<Vec<f64>> =
-                (0..3).map(|a| unit_multisine(seed, a, total, CONTROL_PERIOD_S, s).into_iter().map(|v| v * s.amplitude_m).collect()).collect();
+            let perturbation: Vec<Vec<f64>> = (0..3)
+                .map(|a| {
+                    unit_multisine(seed, a, total, CONTROL_PERIOD_S, s).into_iter().map(|v| v * s.amplitude_m).collect()
+                })
+                .collect();
             let nominal = |k: usize| Vec3::new(s.cruise_speed_mps * k as f64 * CONTROL_PERIOD_S, 0.0, s.altitude_m);
-            let points = (0..total).map(|k| nominal(k) + Vec3::new(perturbation[0][k], perturbation[1][k], perturbation[2][k])).collect();
+            let points = (0..total)
+                .map(|k| nominal(k) + Vec3::new(perturbation[0][k], perturbation[1][k], perturbation[2][k]))
+                .collect();
             let reference = Arc::new(Reference::new("sysid", CONTROL_PERIOD_S, points));
             let flown = evaluate_tracking(robot, &pilot, &exact, reference, 1, seed)?.remove(0);
             let last_s = flown.steps.last().map_or(0.0, |st| st.time_s);
@@ -268,14 +277,21 @@ pub struct SysidReport {
 }
 
 /// Fits both model forms to the identification records and validates them on the others.
-pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<(SysidReport, [TransferFunction; 3]), AnalysisError> {
+pub fn identify(
+    records: &[FlownRecord],
+    s: &SysidSettings,
+) -> Result<(SysidReport, [TransferFunction; 3]), AnalysisError> {
     let settings = FitSettings { dt_s: CONTROL_PERIOD_S, filter_pole_radps: s.filter_pole_radps, skip_s: s.skip_s };
-    let set = |which: DataSet, axis: usize| -> Vec<Record> { records.iter().filter(|r| r.set == which).map(|r| r.axes[axis].clone()).collect() };
+    let set = |which: DataSet, axis: usize| -> Vec<Record> {
+        records.iter().filter(|r| r.set == which).map(|r| r.axes[axis].clone()).collect()
+    };
     let identification: Vec<Vec<Record>> = (0..3).map(|a| set(DataSet::Identification, a)).collect();
     let common = fit_common_denominator(&identification, &settings).ok_or(AnalysisError::FitFailed)?;
     let mut separate = Vec::new();
     for axis in &identification {
-        separate.push(fit_common_denominator(std::slice::from_ref(axis), &settings).ok_or(AnalysisError::FitFailed)?.remove(0));
+        separate.push(
+            fit_common_denominator(std::slice::from_ref(axis), &settings).ok_or(AnalysisError::FitFailed)?.remove(0),
+        );
     }
     let report_of = |models: &[TransferFunction]| {
         let m = |a: usize| AxisModel::of(&models[a], validate(&models[a], &set(DataSet::Validation, a), &settings));
@@ -305,8 +321,14 @@ struct IoRow {
 }
 
 /// Writes `sysid.json`, `sysid_io.csv`, `pole_zero.svg` and `validation.svg` into `dir`.
-pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFunction; 3], records: &[FlownRecord]) -> Result<Vec<PathBuf>, AnalysisError> {
-    let fail = |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+pub fn write_sysid_files(
+    dir: &Path,
+    report: &SysidReport,
+    models: &[TransferFunction; 3],
+    records: &[FlownRecord],
+) -> Result<Vec<PathBuf>, AnalysisError> {
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let json = dir.join("sysid.json");
     let text = serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?;
     flapper_plot::write_atomically(&json, text.as_bytes()).map_err(|e| fail(&json, &e))?;
@@ -346,16 +368,35 @@ pub fn write_sysid_files(dir: &Path, report: &SysidReport, models: &[TransferFun
         let panels: Vec<Panel> = (0..3)
             .map(|a| {
                 let predicted = models[a].simulate(&first.axes[a].input, CONTROL_PERIOD_S);
-                let series = |values: &[f64]| first.time_s.iter().zip(values).skip(skip).map(|(&t, &v)| (t, v)).collect();
+                let series =
+                    |values: &[f64]| first.time_s.iter().zip(values).skip(skip).map(|(&t, &v)| (t, v)).collect();
                 let m = report.common.each()[a].1;
                 Panel {
-                    title: format!("{}: validation record (seed {}), fit {:.1}%, MSE {:.2e} m^2", AXES[a], first.seed, m.fit_percent, m.mse_validation),
+                    title: format!(
+                        "{}: validation record (seed {}), fit {:.1}%, MSE {:.2e} m^2",
+                        AXES[a], first.seed, m.fit_percent, m.mse_validation
+                    ),
                     x_label: "time (s)",
                     y_label: "deviation (m)",
                     curves: vec![
-                        Curve { label: "target perturbation (input)".into(), points: series(&first.axes[a].input), color: COLORS[2], dashed: true },
-                        Curve { label: "flown (measured)".into(), points: series(&first.axes[a].output), color: COLORS[0], dashed: false },
-                        Curve { label: "model (predicted)".into(), points: series(&predicted), color: COLORS[1], dashed: false },
+                        Curve {
+                            label: "target perturbation (input)".into(),
+                            points: series(&first.axes[a].input),
+                            color: COLORS[2],
+                            dashed: true,
+                        },
+                        Curve {
+                            label: "flown (measured)".into(),
+                            points: series(&first.axes[a].output),
+                            color: COLORS[0],
+                            dashed: false,
+                        },
+                        Curve {
+                            label: "model (predicted)".into(),
+                            points: series(&predicted),
+                            color: COLORS[1],
+                            dashed: false,
+                        },
                     ],
                     equal_aspect: false,
                 }

@@ -14,7 +14,11 @@ fn records(system: &TransferFunction, seeds: std::ops::Range<u64>, noise_m: f64,
         .map(|seed| {
             let input = multisine(seed, axis, 1500, 0.02);
             let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xabc);
-            let output = system.simulate(&input, 0.02).into_iter().map(|y| y + noise_m * (rng.random::<f64>() - 0.5) * 2.0).collect();
+            let output = system
+                .simulate(&input, 0.02)
+                .into_iter()
+                .map(|y| y + noise_m * (rng.random::<f64>() - 0.5) * 2.0)
+                .collect();
             Record { input, output }
         })
         .collect()

@@ -7,13 +7,13 @@ use flapper_analysis::robustness::{
     EnvelopeResult, FluidSeries, RobustnessSettings, Sweep, Tally, default_winds, fluid_randomization, needed_airspeed,
     nominal_randomization, robustness, table_iii_randomization, wind_randomization,
 };
+use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::randomization::randomize;
 use flapper_task::reference::Reference;
 use flapper_task::reference::named::named;
-use flapper_eval::load_flight_policy;
 use rand::SeedableRng;
 
 /// Tallies agree (NaN RMS, when nothing completed, agrees with NaN).
@@ -35,7 +35,8 @@ fn stage3_on_sharp_turn() -> (RobotModel, Pilot, TaskConfig, Arc<Reference>) {
 fn a_kutta_lift_setting_changes_only_kutta_lift_in_mujoco_and_the_next_draw_restores_it() {
     let robot = RobotModel::flapper().unwrap();
     let mut sim = robot.instantiate().unwrap();
-    let nominal: Vec<[f64; 5]> = LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
+    let nominal: Vec<[f64; 5]> =
+        LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let mut kutta_scales = Vec::new();
     for _ in 0..20 {
@@ -56,12 +57,17 @@ fn a_kutta_lift_setting_changes_only_kutta_lift_in_mujoco_and_the_next_draw_rest
     assert!(low < 0.8 && high > 1.2, "draws should spread over the range, got [{low}, {high}]");
 
     randomize(&mut sim, &nominal_randomization(), &mut rng).unwrap();
-    let restored: Vec<[f64; 5]> = LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
+    let restored: Vec<[f64; 5]> =
+        LIFTING_SURFACE_GEOMS.iter().map(|g| sim.fluid_coefficients(g).unwrap().to_array()).collect();
     assert_eq!(restored, nominal, "a nominal draw restores the model");
 
     randomize(&mut sim, &fluid_randomization(FluidSeries::All, 0.3), &mut rng).unwrap();
     let all = sim.fluid_coefficients(LIFTING_SURFACE_GEOMS[0]).unwrap().to_array();
-    assert!((0..5).all(|i| all[i] != nominal[0][i] && (all[i] / nominal[0][i] - 1.0).abs() <= 0.3), "{all:?} vs {:?}", nominal[0]);
+    assert!(
+        (0..5).all(|i| all[i] != nominal[0][i] && (all[i] / nominal[0][i] - 1.0).abs() <= 0.3),
+        "{all:?} vs {:?}",
+        nominal[0]
+    );
 
     randomize(&mut sim, &wind_randomization([-2.0, 1.0, 0.5]), &mut rng).unwrap();
     assert_eq!(sim.wind(), Vec3::new(-2.0, 1.0, 0.5), "a wind setting is a constant wind");
@@ -99,8 +105,16 @@ fn the_sweep_counts_the_evaluation_s_completed_episodes() {
     // Each setting's tally is the count of completed episodes of that setting's evaluation.
     for row in report.fluid.iter().filter(|f| f.range == 0.5) {
         let series = FluidSeries::ALL.into_iter().find(|s| s.name() == row.coefficient).unwrap();
-        let results =
-            evaluate_tracking_randomized(&robot, &pilot, &task, &fluid_randomization(series, 0.5), reference.clone(), 6, 3).unwrap();
+        let results = evaluate_tracking_randomized(
+            &robot,
+            &pilot,
+            &task,
+            &fluid_randomization(series, 0.5),
+            reference.clone(),
+            6,
+            3,
+        )
+        .unwrap();
         let completed = results.iter().filter(|r| r.completed()).count();
         assert_eq!((row.tally.episodes, row.tally.successes), (6, completed), "{}", row.coefficient);
         assert_eq!(row.tally.success_rate, completed as f64 / 6.0);
@@ -133,7 +147,12 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
     let longitudinal = needed_airspeed(&named("longitudinal", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap(), [0.0; 3]);
     assert!(longitudinal.slowest_mps >= 3.8 - 1e-9 && longitudinal.fastest_mps > 4.0, "{longitudinal:?}");
 
-    let envelope = |lo, hi| EnvelopeResult { speeds: Vec::new(), slowest_sustained_mps: lo, fastest_sustained_mps: hi, fastest_flown_mps: 8.0 };
+    let envelope = |lo, hi| EnvelopeResult {
+        speeds: Vec::new(),
+        slowest_sustained_mps: lo,
+        fastest_sustained_mps: hi,
+        fastest_flown_mps: 8.0,
+    };
     assert_eq!(tail.inside(&envelope(Some(3.0), Some(8.0))), Some(false), "2.8 m/s is slower than 3 m/s");
     assert_eq!(tail.inside(&envelope(Some(2.5), Some(8.0))), Some(true));
     assert_eq!(head.inside(&envelope(Some(3.0), Some(5.5))), Some(false), "5.8 m/s is faster than 5.5 m/s");
@@ -141,27 +160,42 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
     let gale = needed_airspeed(&cruise, [-5.0, 0.0, 0.0]);
     assert!(close(gale.fastest_mps, 8.8));
     assert_eq!(gale.inside(&envelope(Some(3.0), Some(8.0))), Some(true));
-    assert_eq!(gale.inside(&envelope(Some(3.0), Some(7.5))), Some(false), "8.8 m/s is faster than 7.5 m/s, and 8 was flown");
+    assert_eq!(
+        gale.inside(&envelope(Some(3.0), Some(7.5))),
+        Some(false),
+        "8.8 m/s is faster than 7.5 m/s, and 8 was flown"
+    );
     assert_eq!(still.inside(&envelope(None, None)), None, "no envelope, no judgement");
 }
 
 #[test]
 fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() {
     let (robot, pilot, task, reference) = stage3_on_sharp_turn();
-    let settings = RobustnessSettings { sweeps: vec![Sweep::TableIii, Sweep::Envelope], episodes: 6, seed: 2, ranges: vec![], winds: vec![] };
+    let settings = RobustnessSettings {
+        sweeps: vec![Sweep::TableIii, Sweep::Envelope],
+        episodes: 6,
+        seed: 2,
+        ranges: vec![],
+        winds: vec![],
+    };
     let (report, _) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {}).unwrap();
     let envelope = report.envelope.as_ref().unwrap();
     assert!(envelope.slowest_sustained_mps.is_some(), "the stage-3 policy sustains some level airspeed");
     let inside = report.table_iii_inside_envelope.expect("both sweeps ran");
 
     // The same episodes flown again: each recorded the wind it drew from Table III's box.
-    let results = evaluate_tracking_randomized(&robot, &pilot, &task, &table_iii_randomization(), reference.clone(), 6, 2).unwrap();
+    let results =
+        evaluate_tracking_randomized(&robot, &pilot, &task, &table_iii_randomization(), reference.clone(), 6, 2)
+            .unwrap();
     assert_same(&Tally::of(&results), report.table_iii.as_ref().unwrap(), "Table III");
     for r in &results {
         let w = r.wind_mps;
         assert!(w != Vec3::ZERO && w.x.abs() <= 2.0 && w.y.abs() <= 2.0 && w.z.abs() <= 1.5, "{w:?}");
     }
-    let allowed: Vec<_> = results.iter().filter(|r| needed_airspeed(&reference, r.wind_mps.to_array()).inside(envelope) == Some(true)).collect();
+    let allowed: Vec<_> = results
+        .iter()
+        .filter(|r| needed_airspeed(&reference, r.wind_mps.to_array()).inside(envelope) == Some(true))
+        .collect();
     assert_eq!(inside.episodes, allowed.len());
     assert_eq!(inside.successes, allowed.iter().filter(|r| r.completed()).count());
     // Unrandomized episodes fly in still air.

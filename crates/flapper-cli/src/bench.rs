@@ -4,24 +4,47 @@
 use anyhow::{Result, bail};
 use flapper_sim::RobotModel;
 
-pub fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usize, threads: usize, train_iterations: usize) -> Result<()> {
+pub fn bench_command(
+    robot: &RobotModel,
+    blocks: usize,
+    steps: usize,
+    envs: usize,
+    threads: usize,
+    train_iterations: usize,
+) -> Result<()> {
     if blocks == 0 || steps < 5 || blocks > 1000 || steps > 10_000_000 {
         bail!("--blocks must be 1 to 1000 and --steps 5 to 10000000 (got {blocks} and {steps})");
     }
     if envs > 65_536 || threads > 1024 || train_iterations > 100_000 {
-        bail!("--envs must be at most 65536, --threads at most 1024 and --train-iterations at most 100000 (got {envs}, {threads} and {train_iterations})");
+        bail!(
+            "--envs must be at most 65536, --threads at most 1024 and --train-iterations at most 100000 (got {envs}, {threads} and {train_iterations})"
+        );
     }
     let t = flapper_sim::benchmark::time_steps(robot, blocks, steps)?;
-    println!("model {} on one thread, {} blocks of {} steps (flapping at 3.8 m/s):", robot.origin(), t.blocks, t.steps_per_block);
-    println!("  mj_step        median {:.2} us  (min {:.2}, max {:.2})", t.median_us_per_mj_step, t.min_us_per_mj_step, t.max_us_per_mj_step);
+    println!(
+        "model {} on one thread, {} blocks of {} steps (flapping at 3.8 m/s):",
+        robot.origin(),
+        t.blocks,
+        t.steps_per_block
+    );
+    println!(
+        "  mj_step        median {:.2} us  (min {:.2}, max {:.2})",
+        t.median_us_per_mj_step, t.min_us_per_mj_step, t.max_us_per_mj_step
+    );
     println!("  control step   median {:.2} us  (5 substeps = 20 ms simulated)", t.median_us_per_control_step);
     println!("  real-time factor {:.0}x", 20_000.0 / t.median_us_per_control_step);
     if envs > 0 {
         let env_blocks = blocks.clamp(1, 7);
         let v = flapper_task::benchmark::time_vec_env(robot, envs, threads, env_blocks, 50)?;
         let raw = v.threads as f64 * 1e6 / t.median_us_per_control_step;
-        println!("{} environments on {} threads, {} blocks of 50 steps (observation, reward, resets included):", v.envs, v.threads, v.blocks);
-        println!("  environment steps/s  median {:.0}  (min {:.0}, max {:.0})", v.median_steps_per_s, v.min_steps_per_s, v.max_steps_per_s);
+        println!(
+            "{} environments on {} threads, {} blocks of 50 steps (observation, reward, resets included):",
+            v.envs, v.threads, v.blocks
+        );
+        println!(
+            "  environment steps/s  median {:.0}  (min {:.0}, max {:.0})",
+            v.median_steps_per_s, v.min_steps_per_s, v.max_steps_per_s
+        );
         println!("  raw MuJoCo bound     {raw:.0} control steps/s ({} threads x one-thread control step)", v.threads);
         println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
     }
@@ -33,7 +56,14 @@ pub fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usiz
     let action_size = flapper_task::action::ACTION_SIZE;
     let ppo = flapper_ppo::PpoConfig::default();
     let envs_per_rollout = flapper_ppo::RunnerConfig::default().envs;
-    let n = flapper_ppo::benchmark::time_ppo_update(observation_size, action_size, envs_per_rollout, &ppo, threads, blocks.clamp(3, 21));
+    let n = flapper_ppo::benchmark::time_ppo_update(
+        observation_size,
+        action_size,
+        envs_per_rollout,
+        &ppo,
+        threads,
+        blocks.clamp(3, 21),
+    );
     let hidden = |h: &[usize]| h.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ");
     println!(
         "PPO update (actor {observation_size} -> {} -> {action_size}, critic -> {} -> 1, side by side), {} epochs of minibatch {}, {} threads:",
@@ -47,8 +77,14 @@ pub fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usiz
     if train_iterations > 0 {
         let envs = if envs > 0 { envs } else { 256 };
         let t = flapper_train::benchmark::time_training(robot, envs, threads, train_iterations)?;
-        println!("PPO training end to end, stage 1 from scratch, {} environments x 24 steps, {} threads, {} iterations:", t.envs, t.threads, t.iterations);
-        println!("  environment steps/s  median {:.0}  (paper: 30 M steps in about 5 h on 8 cores = 1.7 k/s)", t.median_steps_per_s);
+        println!(
+            "PPO training end to end, stage 1 from scratch, {} environments x 24 steps, {} threads, {} iterations:",
+            t.envs, t.threads, t.iterations
+        );
+        println!(
+            "  environment steps/s  median {:.0}  (paper: 30 M steps in about 5 h on 8 cores = 1.7 k/s)",
+            t.median_steps_per_s
+        );
         println!(
             "  time split           environments {:.0}%, inference {:.0}%, update {:.0}%",
             100.0 * t.env_fraction,
@@ -58,4 +94,3 @@ pub fn bench_command(robot: &RobotModel, blocks: usize, steps: usize, envs: usiz
     }
     Ok(())
 }
-

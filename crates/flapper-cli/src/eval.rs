@@ -6,11 +6,13 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use flapper_eval::ScriptedGaitConfig;
+use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{Pilot, evaluate_tracking};
-use flapper_eval::tracking_report::{TrackingSummary, write_observations_csv, write_steps_csv, write_summary_csv, write_tracking_plots};
+use flapper_eval::tracking_report::{
+    TrackingSummary, write_observations_csv, write_steps_csv, write_summary_csv, write_tracking_plots,
+};
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
-use flapper_eval::load_flight_policy;
 
 /// `flapper eval`'s arguments, as parsed.
 pub struct EvalArgs<'a> {
@@ -46,13 +48,19 @@ pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
     let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
     crate::output_dir::prepare_output_dir(out)?;
-    println!("{}: {:.1} s, {} episodes from randomized starts (seed {seed})", reference.name(), reference.duration_s(), episodes);
+    println!(
+        "{}: {:.1} s, {} episodes from randomized starts (seed {seed})",
+        reference.name(),
+        reference.duration_s(),
+        episodes
+    );
     let mut summaries = Vec::new();
     for (name, pilot, task) in &pilots {
         let began = std::time::Instant::now();
         let results = evaluate_tracking(robot, pilot, task, reference.clone(), episodes, seed)?;
         let period = task.control_period_s(robot.timestep_s());
-        let summary = TrackingSummary::of(&results, period, flapper_task::reference::named::manoeuvre_window_s(reference.name()));
+        let summary =
+            TrackingSummary::of(&results, period, flapper_task::reference::named::manoeuvre_window_s(reference.name()));
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;
@@ -62,7 +70,13 @@ pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
             write_observations_csv(&record, &names, &dir.join("observations.csv"))?;
         }
         let plots = write_tracking_plots(&results, &format!("{name} on {}", reference.name()), &dir, 3)?;
-        eprintln!("  {name}: {} episodes in {:.1} s, wrote {} and {} plots", episodes, began.elapsed().as_secs_f64(), dir.join("steps.csv").display(), plots.len());
+        eprintln!(
+            "  {name}: {} episodes in {:.1} s, wrote {} and {} plots",
+            episodes,
+            began.elapsed().as_secs_f64(),
+            dir.join("steps.csv").display(),
+            plots.len()
+        );
         summaries.push((*name, summary));
     }
     let tables: Vec<Vec<(String, String)>> = summaries.iter().map(|(_, s)| s.rows()).collect();

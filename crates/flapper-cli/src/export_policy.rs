@@ -9,4 +9,3 @@ pub fn export_policy_command(checkpoint: &Path, out: &Path) -> Result<()> {
     println!("wrote {} (iteration {}, {} environment steps)", out.display(), info.iteration, info.env_steps);
     Ok(())
 }
-

@@ -5,7 +5,9 @@ use std::path::Path;
 
 use anyhow::{Result, bail};
 use clap::ValueEnum;
-use flapper_eval::{Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots};
+use flapper_eval::{
+    Controller, FlightSpec, GlideController, ScriptedGait, ScriptedGaitConfig, fly, write_flight_plots,
+};
 use flapper_sim::RobotModel;
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -29,9 +31,11 @@ pub fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_
             FlightSpec::cruise_launch(seconds, ScriptedGaitConfig::default().body_pitch_deg),
             "scripted gait",
         ),
-        ControllerKind::Glide => {
-            (Box::new(GlideController { tail_rad: tail_deg.to_radians() }), FlightSpec::cruise_launch(seconds, 7.5), "glide")
-        }
+        ControllerKind::Glide => (
+            Box::new(GlideController { tail_rad: tail_deg.to_radians() }),
+            FlightSpec::cruise_launch(seconds, 7.5),
+            "glide",
+        ),
     };
     crate::output_dir::prepare_output_dir(out)?;
     let log = fly(robot, controller.as_mut(), &spec)?;
@@ -40,16 +44,24 @@ pub fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_
     let plots = write_flight_plots(&log, out, name)?;
     let s = log.summary();
     println!("{name}: {:.2} s flown{}", s.duration_s, log.fault().map_or(String::new(), |f| format!(", stopped: {f}")));
-    println!("  altitude change      {:+.3} m (largest deviation {:.3} m)", s.altitude_change_m, s.max_altitude_deviation_m);
-    println!("  distance             {:.1} m, mean speed {:.2} m/s, mean airspeed {:.2} m/s", s.horizontal_distance_m, s.mean_speed_mps, s.mean_airspeed_mps);
+    println!(
+        "  altitude change      {:+.3} m (largest deviation {:.3} m)",
+        s.altitude_change_m, s.max_altitude_deviation_m
+    );
+    println!(
+        "  distance             {:.1} m, mean speed {:.2} m/s, mean airspeed {:.2} m/s",
+        s.horizontal_distance_m, s.mean_speed_mps, s.mean_airspeed_mps
+    );
     if s.altitude_change_m < -0.01 {
         println!("  glide ratio          {:.2}", s.horizontal_distance_m / -s.altitude_change_m);
     }
-    println!("  mechanical power     {:.2} W net, {:.2} W absolute", s.mean_mechanical_power_w, s.mean_absolute_power_w);
+    println!(
+        "  mechanical power     {:.2} W net, {:.2} W absolute",
+        s.mean_mechanical_power_w, s.mean_absolute_power_w
+    );
     println!("wrote {}", csv.display());
     for plot in plots {
         println!("wrote {}", plot.display());
     }
     Ok(())
 }
-

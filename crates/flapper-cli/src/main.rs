@@ -23,7 +23,11 @@ mod sysid;
 mod train;
 
 #[derive(Parser)]
-#[command(name = "flapper", version, about = "Learning-based trajectory tracking for a bird-inspired flapping-wing robot")]
+#[command(
+    name = "flapper",
+    version,
+    about = "Learning-based trajectory tracking for a bird-inspired flapping-wing robot"
+)]
 struct Cli {
     /// Robot model (MJCF). Defaults to the shipped models/flapper.xml.
     #[arg(long, global = true, value_name = "FILE")]
@@ -272,7 +276,6 @@ enum Command {
     },
 }
 
-
 fn main() -> ExitCode {
     // MuJoCo's messages go through `log` (silent by default) instead of stdout and MUJOCO_LOG.TXT.
     // SAFETY: called first thing, before any thread exists or MuJoCo is used.
@@ -312,8 +315,12 @@ fn run(cli: Cli) -> Result<()> {
         None => RobotModel::flapper()?,
     };
     match cli.command {
-        Command::Fly { controller, seconds, out, tail_deg } => fly::fly_command(&robot, controller, seconds, tail_deg, &out),
-        Command::Reference { reference, list, out } => reference::reference_command(&robot, reference.as_deref(), list, &out),
+        Command::Fly { controller, seconds, out, tail_deg } => {
+            fly::fly_command(&robot, controller, seconds, tail_deg, &out)
+        }
+        Command::Reference { reference, list, out } => {
+            reference::reference_command(&robot, reference.as_deref(), list, &out)
+        }
         Command::Bench { blocks, steps, envs, threads, train_iterations } => {
             bench::bench_command(&robot, blocks, steps, envs, threads, train_iterations)
         }
@@ -336,18 +343,37 @@ fn run(cli: Cli) -> Result<()> {
         Command::ExportPolicy { checkpoint, out } => export_policy::export_policy_command(&checkpoint, &out),
         Command::Phase { policy, speed_mps, out } => phase::phase_command(&robot, &policy, speed_mps, &out),
         Command::Modes { policy, out } => modes::modes_command(&robot, &policy, &out),
-        Command::Robustness { policy, reference, episodes, seed, sweeps, ranges, out } => robustness::robustness_command(
-            &robot,
-            robustness::RobustnessArgs { policy: &policy, reference: &reference, episodes, seed, sweeps: &sweeps, ranges: ranges.as_deref(), out: &out },
-        ),
+        Command::Robustness { policy, reference, episodes, seed, sweeps, ranges, out } => {
+            robustness::robustness_command(
+                &robot,
+                robustness::RobustnessArgs {
+                    policy: &policy,
+                    reference: &reference,
+                    episodes,
+                    seed,
+                    sweeps: &sweeps,
+                    ranges: ranges.as_deref(),
+                    out: &out,
+                },
+            )
+        }
         Command::Sysid { policy, seed, amplitude_m, input_lead_s, out } => {
             sysid::sysid_command(&robot, &policy, seed, amplitude_m, input_lead_s, &out)
         }
         Command::Report { policy, episodes, robustness_episodes, seed, no_pictures, out } => {
-            let settings = flapper_report::ReportSettings { policy, episodes, robustness_episodes, seed, pictures: !no_pictures, ..Default::default() };
+            let settings = flapper_report::ReportSettings {
+                policy,
+                episodes,
+                robustness_episodes,
+                seed,
+                pictures: !no_pictures,
+                ..Default::default()
+            };
             report::report_command(&robot, &settings, &out)
         }
-        Command::Render { policy, reference, seed, out } => report::render_command(&robot, &policy, &reference, seed, &out),
+        Command::Render { policy, reference, seed, out } => {
+            report::render_command(&robot, &policy, &reference, seed, &out)
+        }
         Command::Pendulum { seeds, max_iterations, out } => train::pendulum_command(&seeds, max_iterations, &out),
     }
 }

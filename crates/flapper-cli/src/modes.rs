@@ -5,15 +5,18 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use flapper_analysis::modes::flight_modes;
-use flapper_sim::RobotModel;
 use flapper_eval::load_flight_policy;
+use flapper_sim::RobotModel;
 
 pub fn modes_command(robot: &RobotModel, policy_path: &Path, out: &Path) -> Result<()> {
     let (policy, task) = load_flight_policy(policy_path)?;
     crate::output_dir::prepare_output_dir(out)?;
     let (report, written) = flight_modes(robot, Arc::new(policy), &task, out)?;
     println!("flight modes of {} on the longitudinal reference (exact start):", policy_path.display());
-    println!("{:<8} {:>9} {:>16} {:>14} {:>12} {:>14}  glides", "segment", "time (s)", "flap ampl. (deg)", "flap fund. (Hz)", "energy (%)", "power (W) net/abs");
+    println!(
+        "{:<8} {:>9} {:>16} {:>14} {:>12} {:>14}  glides",
+        "segment", "time (s)", "flap ampl. (deg)", "flap fund. (Hz)", "energy (%)", "power (W) net/abs"
+    );
     for s in &report.segments {
         println!(
             "{:<8} {:>4.0}-{:<4.0} {:>16.1} {:>14.2} {:>12.0} {:>8.1} / {:<5.1}  {}",

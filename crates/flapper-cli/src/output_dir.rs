@@ -14,7 +14,8 @@ pub fn prepare_output_dir(out: &Path) -> Result<()> {
     if out.exists() && !out.is_dir() {
         bail!("--out '{}' is a file, not a folder", out.display());
     }
-    let has_files = out.is_dir() && std::fs::read_dir(out).with_context(|| format!("cannot read '{}'", out.display()))?.next().is_some();
+    let has_files = out.is_dir()
+        && std::fs::read_dir(out).with_context(|| format!("cannot read '{}'", out.display()))?.next().is_some();
     if has_files && !out.join(OUTPUT_MARKER).exists() {
         bail!(
             "--out '{}' holds files flapper did not write (no {OUTPUT_MARKER} in it), which this command could overwrite; give a new or empty folder",
@@ -24,8 +25,11 @@ pub fn prepare_output_dir(out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory '{}'", out.display()))?;
     let marker = out.join(OUTPUT_MARKER);
     if !marker.exists() {
-        flapper_plot::write_atomically(&marker, b"written by flapper: files here are replaced by the next command writing here\n")
-            .with_context(|| format!("cannot write '{}'", marker.display()))?;
+        flapper_plot::write_atomically(
+            &marker,
+            b"written by flapper: files here are replaced by the next command writing here\n",
+        )
+        .with_context(|| format!("cannot write '{}'", marker.display()))?;
     }
     Ok(())
 }

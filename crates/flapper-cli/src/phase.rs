@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use flapper_analysis::phase::phase_portraits;
-use flapper_sim::RobotModel;
 use flapper_eval::load_flight_policy;
+use flapper_sim::RobotModel;
 
 pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out: &Path) -> Result<()> {
     if !(speed_mps.is_finite() && (2.0..=6.0).contains(&speed_mps)) {
@@ -15,7 +15,12 @@ pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out
     let (policy, task) = load_flight_policy(policy_path)?;
     crate::output_dir::prepare_output_dir(out)?;
     let (report, written) = phase_portraits(robot, Arc::new(policy), &task, speed_mps, out)?;
-    println!("phase portraits of {} (right wing; cruise and climb at {} m/s, climb {} m/s):", policy_path.display(), report.forward_speed_mps, report.climb_rate_mps);
+    println!(
+        "phase portraits of {} (right wing; cruise and climb at {} m/s, climb {} m/s):",
+        policy_path.display(),
+        report.forward_speed_mps,
+        report.climb_rate_mps
+    );
     for (flight, orbits) in [("cruise", &report.cruise), ("climb", &report.climb)] {
         for (joint, o) in orbits.iter() {
             println!(
@@ -27,7 +32,10 @@ pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out
     match (&report.turn_left, &report.turn_skipped_because) {
         (Some(orbits), _) => {
             for (joint, o) in orbits.iter() {
-                println!("  turn L  {joint:<12} mean {:>6.1} deg, amplitude {:>5.1} deg, cycle spread {:>4.1}%", o.mean_deg, o.amplitude_deg, o.orbit_spread_percent);
+                println!(
+                    "  turn L  {joint:<12} mean {:>6.1} deg, amplitude {:>5.1} deg, cycle spread {:>4.1}%",
+                    o.mean_deg, o.amplitude_deg, o.orbit_spread_percent
+                );
             }
         }
         (None, Some(why)) => println!("  left turn skipped: {why}"),
@@ -35,7 +43,12 @@ pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out
     }
     println!("the paper's claims:");
     for claim in &report.claims {
-        println!("  [{}] {} ({})", if claim.confirmed { "confirmed" } else { "NOT confirmed" }, claim.claim, claim.ours);
+        println!(
+            "  [{}] {} ({})",
+            if claim.confirmed { "confirmed" } else { "NOT confirmed" },
+            claim.claim,
+            claim.ours
+        );
     }
     for path in written {
         println!("wrote {}", path.display());

@@ -27,7 +27,12 @@ impl Progress {
         self.bar.set_message(what.to_owned());
         self.bar.inc(1);
         if !self.interactive {
-            eprintln!("{}/{} ({:.0} s): {what}", self.bar.position(), self.bar.length().unwrap_or(0), self.bar.elapsed().as_secs_f64());
+            eprintln!(
+                "{}/{} ({:.0} s): {what}",
+                self.bar.position(),
+                self.bar.length().unwrap_or(0),
+                self.bar.elapsed().as_secs_f64()
+            );
         }
     }
 

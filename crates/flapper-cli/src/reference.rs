@@ -5,7 +5,12 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 
-pub fn reference_command(robot: &flapper_sim::RobotModel, reference: Option<&str>, list: bool, out: &Path) -> Result<()> {
+pub fn reference_command(
+    robot: &flapper_sim::RobotModel,
+    reference: Option<&str>,
+    list: bool,
+    out: &Path,
+) -> Result<()> {
     use flapper_task::reference::named::NAMED_REFERENCES;
     if list {
         for (name, what) in NAMED_REFERENCES {
@@ -19,7 +24,8 @@ pub fn reference_command(robot: &flapper_sim::RobotModel, reference: Option<&str
     crate::output_dir::prepare_output_dir(out)?;
     let csv_path = out.join("reference.csv");
     let text = flapper_task::reference::csv_file::reference_csv_text(loaded.points(), dt_s);
-    flapper_plot::write_atomically(&csv_path, text.as_bytes()).with_context(|| format!("cannot write '{}'", csv_path.display()))?;
+    flapper_plot::write_atomically(&csv_path, text.as_bytes())
+        .with_context(|| format!("cannot write '{}'", csv_path.display()))?;
     let plot = out.join("reference.svg");
     flapper_eval::write_path_views(loaded.points(), loaded.name(), &plot)?;
     let speeds: Vec<f64> = (0..loaded.len() - 1).map(|k| loaded.speed(k)).collect();

@@ -6,10 +6,9 @@ use std::sync::Arc;
 
 use anyhow::{Result, bail};
 use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, Sweep, robustness, write_robustness};
+use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
-use flapper_eval::load_flight_policy;
-
 
 pub struct RobustnessArgs<'a> {
     pub policy: &'a Path,
@@ -38,13 +37,19 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
     }
     let ranges = args.ranges.unwrap_or(&PAPER_RANGES);
     if let Some(bad) = ranges.iter().find(|r| !(r.is_finite() && (0.0..=MAX_RANGE).contains(*r))) {
-        bail!("--ranges: each range must be in [0, {MAX_RANGE}] (coefficients drawn from [1 - r, 1 + r] x nominal), got {bad}");
+        bail!(
+            "--ranges: each range must be in [0, {MAX_RANGE}] (coefficients drawn from [1 - r, 1 + r] x nominal), got {bad}"
+        );
     }
     if ranges.is_empty() || ranges.len() > 100 {
         bail!("--ranges: give 1 to 100 ranges, got {}", ranges.len());
     }
     let (policy, task) = load_flight_policy(args.policy)?;
-    let reference = Arc::new(flapper_task::reference::resolve(args.reference, task.control_period_s(robot.timestep_s()), task.observation.lookahead_steps)?);
+    let reference = Arc::new(flapper_task::reference::resolve(
+        args.reference,
+        task.control_period_s(robot.timestep_s()),
+        task.observation.lookahead_steps,
+    )?);
     crate::output_dir::prepare_output_dir(args.out)?;
     let settings = RobustnessSettings {
         sweeps,
@@ -65,7 +70,8 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
     );
     let progress = crate::progress::Progress::new(settings.settings_count(), "settings");
     let pilot = Pilot::Policy(Arc::new(policy));
-    let (report, wind_paths) = robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| progress.step_done(done))?;
+    let (report, wind_paths) =
+        robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| progress.step_done(done))?;
     progress.finish();
 
     if !report.fluid.is_empty() {
@@ -87,7 +93,9 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         }
     }
     if !report.wind.is_empty() {
-        println!("constant winds (world frame; the reference starts along +x), and the airspeeds the reference then asks for:");
+        println!(
+            "constant winds (world frame; the reference starts along +x), and the airspeeds the reference then asks for:"
+        );
         for w in &report.wind {
             let envelope = match w.inside_envelope {
                 Some(true) => "  inside the level envelope",
@@ -112,7 +120,13 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         }
     }
     if let Some(t) = &report.table_iii {
-        println!("everything in Table III randomized at once: {}/{} ({:.0}%), RMS {:.3} m", t.successes, t.episodes, 100.0 * t.success_rate, t.mean_rms_error_m);
+        println!(
+            "everything in Table III randomized at once: {}/{} ({:.0}%), RMS {:.3} m",
+            t.successes,
+            t.episodes,
+            100.0 * t.success_rate,
+            t.mean_rms_error_m
+        );
     }
     if let (Some(inside), Some(envelope)) = (&report.table_iii_inside_envelope, &report.envelope) {
         println!(
@@ -125,7 +139,8 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         );
     }
     if let Some(envelope) = &report.envelope {
-        let speeds: Vec<String> = envelope.speeds.iter().map(|(v, t)| format!("{v}: {}/{}", t.successes, t.episodes)).collect();
+        let speeds: Vec<String> =
+            envelope.speeds.iter().map(|(v, t)| format!("{v}: {}/{}", t.successes, t.episodes)).collect();
         println!("level flight, 15 s at each airspeed (m/s), completed: {}", speeds.join(", "));
         match (envelope.slowest_sustained_mps, envelope.fastest_sustained_mps) {
             (Some(lo), Some(hi)) => println!("sustained level airspeeds (>= 90% completed): {lo} to {hi} m/s"),

@@ -6,14 +6,25 @@ use std::sync::Arc;
 use anyhow::{Result, bail};
 use flapper_analysis::linear_system::polynomial_text as polynomial;
 use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
-use flapper_sim::RobotModel;
 use flapper_eval::load_flight_policy;
+use flapper_sim::RobotModel;
 
 fn roots(pairs: &[[f64; 2]]) -> String {
-    pairs.iter().map(|[re, im]| if *im == 0.0 { format!("{re:.3}") } else { format!("{re:.3}{im:+.3}i") }).collect::<Vec<_>>().join(", ")
+    pairs
+        .iter()
+        .map(|[re, im]| if *im == 0.0 { format!("{re:.3}") } else { format!("{re:.3}{im:+.3}i") })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
-pub fn sysid_command(robot: &RobotModel, policy_path: &Path, seed: u64, amplitude_m: f64, input_lead_s: f64, out: &Path) -> Result<()> {
+pub fn sysid_command(
+    robot: &RobotModel,
+    policy_path: &Path,
+    seed: u64,
+    amplitude_m: f64,
+    input_lead_s: f64,
+    out: &Path,
+) -> Result<()> {
     if !(amplitude_m.is_finite() && amplitude_m > 0.0 && amplitude_m <= 1.0) {
         bail!("--amplitude-m must be in (0, 1] m, got {amplitude_m}");
     }
@@ -25,13 +36,21 @@ pub fn sysid_command(robot: &RobotModel, policy_path: &Path, seed: u64, amplitud
     crate::output_dir::prepare_output_dir(out)?;
     eprintln!(
         "flying {} identification and {} validation records of {:.0} s (cruise {} m/s, target perturbed by {} m RMS per axis, {}-{} Hz)...",
-        settings.identification_records, settings.validation_records, settings.record_s, settings.cruise_speed_mps, amplitude_m,
-        settings.band_hz[0], settings.band_hz[1]
+        settings.identification_records,
+        settings.validation_records,
+        settings.record_s,
+        settings.cruise_speed_mps,
+        amplitude_m,
+        settings.band_hz[0],
+        settings.band_hz[1]
     );
     let records = fly_records(robot, Arc::new(policy), &task, &settings)?;
     let (report, models) = identify(&records, &settings)?;
     let written = write_sysid_files(out, &report, &models, &records)?;
-    println!("closed loop of {}: desired position -> flown position (deviations from a 3.8 m/s cruise)", policy_path.display());
+    println!(
+        "closed loop of {}: desired position -> flown position (deviations from a 3.8 m/s cruise)",
+        policy_path.display()
+    );
     println!("common denominator: {}", polynomial(&report.common.x.denominator));
     for (axis, m) in report.common.each() {
         println!("Y_{axis}(s) = ({}) / D(s)", polynomial(&m.numerator));

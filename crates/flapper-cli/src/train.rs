@@ -38,7 +38,11 @@ pub fn train_command(
     if resume {
         // A resumed run continues its own environments (clap already refuses --seed with --resume).
         if let Some(n) = overrides.envs.filter(|n| *n != config.runner.envs) {
-            bail!("--envs {n} with --resume: the run in '{}' has {} environments (a resumed run keeps them; start a new run with --init-from to change it)", out.display(), config.runner.envs);
+            bail!(
+                "--envs {n} with --resume: the run in '{}' has {} environments (a resumed run keeps them; start a new run with --init-from to change it)",
+                out.display(),
+                config.runner.envs
+            );
         }
     }
     if let Some(n) = overrides.iterations {
@@ -52,9 +56,10 @@ pub fn train_command(
     }
     config.runner.validate(&config.ppo).context("command-line value")?;
     if let Some(path) = &init_from
-        && !path.is_file() {
-            bail!("--init-from '{}' is not a file", path.display());
-        }
+        && !path.is_file()
+    {
+        bail!("--init-from '{}' is not a file", path.display());
+    }
     let start = match (resume, init_from) {
         (true, _) => Start::Resume,
         (false, Some(path)) => Start::InitFrom(path),
@@ -95,9 +100,14 @@ pub fn train_command(
         }
         let episodes: usize = recent.iter().map(|r| r.2).sum();
         let mean = |f: fn(&(f64, f64, usize)) -> f64| {
-            if episodes == 0 { f64::NAN } else { recent.iter().filter(|r| r.2 > 0).map(f).sum::<f64>() / episodes as f64 }
+            if episodes == 0 {
+                f64::NAN
+            } else {
+                recent.iter().filter(|r| r.2 > 0).map(f).sum::<f64>() / episodes as f64
+            }
         };
-        let ending: Vec<String> = ends.iter().zip(&log.end_counts).filter(|(_, c)| **c > 0).map(|(r, c)| format!("{r} {c}")).collect();
+        let ending: Vec<String> =
+            ends.iter().zip(&log.end_counts).filter(|(_, c)| **c > 0).map(|(r, c)| format!("{r} {c}")).collect();
         let message = format!(
             "{:.2}M steps  {:.0} steps/s  return {:.1}  length {:.0}  std {:.2}  ends: {}",
             log.env_steps as f64 / 1e6,
@@ -148,7 +158,9 @@ pub fn pendulum_command(seeds: &[u64], max_iterations: usize, out: &Path) -> Res
     if seeds.is_empty() || max_iterations == 0 {
         bail!("give at least one --seeds value and --max-iterations above 0");
     }
-    println!("inverted pendulum: 64 environments x 24 steps per iteration, solved = mean policy scores 1000 in 5 of 5 test episodes");
+    println!(
+        "inverted pendulum: 64 environments x 24 steps per iteration, solved = mean policy scores 1000 in 5 of 5 test episodes"
+    );
     let mut solved = Vec::new();
     for &seed in seeds {
         let dir = out.join(format!("seed_{seed}"));
@@ -159,10 +171,17 @@ pub fn pendulum_command(seeds: &[u64], max_iterations: usize, out: &Path) -> Res
         let outcome = solve_inverted_pendulum(seed, max_iterations, 5, &dir)?;
         match outcome.steps_to_solve {
             Some(steps) => {
-                println!("  seed {seed}: solved after {steps} environment steps ({} iterations, {:.1} s)", outcome.iterations, began.elapsed().as_secs_f64());
+                println!(
+                    "  seed {seed}: solved after {steps} environment steps ({} iterations, {:.1} s)",
+                    outcome.iterations,
+                    began.elapsed().as_secs_f64()
+                );
                 solved.push(steps);
             }
-            None => println!("  seed {seed}: not solved in {max_iterations} iterations (last test returns {:?})", outcome.test_returns),
+            None => println!(
+                "  seed {seed}: not solved in {max_iterations} iterations (last test returns {:?})",
+                outcome.test_returns
+            ),
         }
     }
     solved.sort_unstable();

@@ -57,7 +57,8 @@ fn malformed_model_file_is_one_line_with_mujocos_message() {
 fn a_model_that_is_not_the_robot_is_rejected() {
     let dir = scratch("other");
     let model = dir.join("ball.xml");
-    std::fs::write(&model, "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>").unwrap();
+    std::fs::write(&model, "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>")
+        .unwrap();
     assert_one_line_error(&flapper(&["--model", model.to_str().unwrap(), "fly"]), "not the flapping-wing robot");
 }
 
@@ -135,12 +136,21 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     let run = dir.join("run");
     let output = flapper(&["train", "--config", config.to_str().unwrap(), "--out", run.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    for file in ["config.toml", "training.csv", "learning_curves.svg", "policy.safetensors", "policy.safetensors.json", "checkpoints/iter_000002.safetensors"] {
+    for file in [
+        "config.toml",
+        "training.csv",
+        "learning_curves.svg",
+        "policy.safetensors",
+        "policy.safetensors.json",
+        "checkpoints/iter_000002.safetensors",
+    ] {
         assert!(run.join(file).exists(), "{file} missing");
     }
     let csv = std::fs::read_to_string(run.join("training.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
-    for column in ["mean_return", "end_too_far", "r_position", "value_loss", "kl", "learning_rate", "action_std", "update_time_s"] {
+    for column in
+        ["mean_return", "end_too_far", "r_position", "value_loss", "kl", "learning_rate", "action_std", "update_time_s"]
+    {
         assert!(csv.lines().next().unwrap().split(',').any(|h| h == column), "no column {column}");
     }
 
@@ -149,9 +159,19 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     assert_one_line_error(&again, "already holds a training run");
     // A resumed run keeps its environment count and seed; asking for others is an error, not a silent change.
     let csv_before = std::fs::read_to_string(run.join("training.csv")).unwrap();
-    assert_one_line_error(&flapper(&["train", "--resume", "--iterations", "3", "--envs", "6", "--out", run.to_str().unwrap()]), "--envs 6 with --resume");
-    assert_one_line_error(&flapper(&["train", "--resume", "--iterations", "3", "--seed", "99", "--out", run.to_str().unwrap()]), "cannot be used with");
-    assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap(), csv_before, "a refused resume changes nothing");
+    assert_one_line_error(
+        &flapper(&["train", "--resume", "--iterations", "3", "--envs", "6", "--out", run.to_str().unwrap()]),
+        "--envs 6 with --resume",
+    );
+    assert_one_line_error(
+        &flapper(&["train", "--resume", "--iterations", "3", "--seed", "99", "--out", run.to_str().unwrap()]),
+        "cannot be used with",
+    );
+    assert_eq!(
+        std::fs::read_to_string(run.join("training.csv")).unwrap(),
+        csv_before,
+        "a refused resume changes nothing"
+    );
     let resumed = flapper(&["train", "--resume", "--iterations", "3", "--out", run.to_str().unwrap()]);
     assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
     assert_eq!(std::fs::read_to_string(run.join("training.csv")).unwrap().lines().count(), 4);
@@ -159,25 +179,46 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     // A checkpoint exported as a policy flies like one; an existing target is refused and kept.
     let exported = dir.join("iter2.safetensors");
     let checkpoint = run.join("checkpoints/iter_000002.safetensors");
-    let output = flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
+    let output =
+        flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(String::from_utf8_lossy(&output.stdout).contains("iteration 2"));
     let sidecar = std::fs::read_to_string(dir.join("iter2.safetensors.json")).unwrap();
     assert!(sidecar.contains("\"kind\": \"policy\""), "{sidecar}");
     let before = std::fs::read(&exported).unwrap();
-    let again = flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
+    let again =
+        flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
     assert_one_line_error(&again, "exists");
     assert_eq!(std::fs::read(&exported).unwrap(), before);
 
     let eval_out = dir.join("eval");
     let policy = run.join("policy.safetensors");
     let output = flapper(&[
-        "eval", "--policy", policy.to_str().unwrap(), "--reference", "cruise", "--episodes", "2", "--out", eval_out.to_str().unwrap(),
+        "eval",
+        "--policy",
+        policy.to_str().unwrap(),
+        "--reference",
+        "cruise",
+        "--episodes",
+        "2",
+        "--out",
+        eval_out.to_str().unwrap(),
     ]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
-    assert!(stdout.contains("completed") && stdout.contains("flap_left fundamental") && stdout.contains("scripted"), "{stdout}");
-    for file in ["summary.csv", "policy/steps.csv", "policy/path_3d.svg", "policy/path.svg", "policy/error.svg", "policy/joints.svg", "scripted/steps.csv"] {
+    assert!(
+        stdout.contains("completed") && stdout.contains("flap_left fundamental") && stdout.contains("scripted"),
+        "{stdout}"
+    );
+    for file in [
+        "summary.csv",
+        "policy/steps.csv",
+        "policy/path_3d.svg",
+        "policy/path.svg",
+        "policy/error.svg",
+        "policy/joints.svg",
+        "scripted/steps.csv",
+    ] {
         assert!(eval_out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
     }
     // summary.csv is the printed table: a row per metric (labels with commas stay one field), a column per pilot.
@@ -195,31 +236,61 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
     let unknown = dir.join("unknown.toml");
     std::fs::write(&unknown, "[ppo]\nclip_range = 0.2\n").unwrap();
     let out = dir.join("run");
-    assert_one_line_error(&flapper(&["train", "--config", unknown.to_str().unwrap(), "--out", out.to_str().unwrap()]), "clip_range");
+    assert_one_line_error(
+        &flapper(&["train", "--config", unknown.to_str().unwrap(), "--out", out.to_str().unwrap()]),
+        "clip_range",
+    );
     let range = dir.join("range.toml");
     std::fs::write(&range, "[ppo]\nlambda = 2.0\n").unwrap();
-    assert_one_line_error(&flapper(&["train", "--config", range.to_str().unwrap(), "--out", out.to_str().unwrap()]), "ppo.lambda");
+    assert_one_line_error(
+        &flapper(&["train", "--config", range.to_str().unwrap(), "--out", out.to_str().unwrap()]),
+        "ppo.lambda",
+    );
     assert_one_line_error(&flapper(&["train", "--stage", "7", "--out", out.to_str().unwrap()]), "stage 7");
-    assert_one_line_error(&flapper(&["train", "--resume", "--out", dir.join("nothing").to_str().unwrap()]), "config.toml");
+    assert_one_line_error(
+        &flapper(&["train", "--resume", "--out", dir.join("nothing").to_str().unwrap()]),
+        "config.toml",
+    );
     assert!(!out.exists(), "a refused run creates nothing");
 
     // A truncated checkpoint: the file is named, nothing is written.
     let config = tiny_train_config(&dir);
     let good = dir.join("good");
-    assert!(flapper(&["train", "--config", config.to_str().unwrap(), "--out", good.to_str().unwrap()]).status.success());
+    assert!(
+        flapper(&["train", "--config", config.to_str().unwrap(), "--out", good.to_str().unwrap()]).status.success()
+    );
     let bytes = std::fs::read(good.join("policy.safetensors")).unwrap();
     let truncated = dir.join("truncated.safetensors");
     std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
     let chained = dir.join("chained");
-    let output = flapper(&["train", "--config", config.to_str().unwrap(), "--init-from", truncated.to_str().unwrap(), "--out", chained.to_str().unwrap()]);
+    let output = flapper(&[
+        "train",
+        "--config",
+        config.to_str().unwrap(),
+        "--init-from",
+        truncated.to_str().unwrap(),
+        "--out",
+        chained.to_str().unwrap(),
+    ]);
     assert_one_line_error(&output, "truncated.safetensors");
     assert!(!chained.join("training.csv").exists());
-    assert_one_line_error(&flapper(&["eval", "--policy", truncated.to_str().unwrap(), "--episodes", "1"]), "truncated.safetensors");
-    assert_one_line_error(&flapper(&["eval", "--reference", "nowhere", "--episodes", "1"]), "unknown reference 'nowhere'");
+    assert_one_line_error(
+        &flapper(&["eval", "--policy", truncated.to_str().unwrap(), "--episodes", "1"]),
+        "truncated.safetensors",
+    );
+    assert_one_line_error(
+        &flapper(&["eval", "--reference", "nowhere", "--episodes", "1"]),
+        "unknown reference 'nowhere'",
+    );
 }
 
 fn shipped_policy(stage: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies").join(stage).join("policy.safetensors").display().to_string()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../policies")
+        .join(stage)
+        .join("policy.safetensors")
+        .display()
+        .to_string()
 }
 
 #[test]
@@ -229,7 +300,8 @@ fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
     let sysid = out.join("sysid");
     let output = flapper(&["sysid", "--policy", &policy, "--out", sysid.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sysid.join("sysid.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sysid.join("sysid.json")).unwrap()).unwrap();
     for axis in ["x", "y", "z"] {
         let m = &report[axis];
         assert_eq!(m["denominator"].as_array().unwrap().len(), 4, "{m}");
@@ -250,13 +322,15 @@ fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("left turn skipped: the policy cannot turn"), "stage 2 never learned to turn: {stdout}");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(phase.join("phase.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(phase.join("phase.json")).unwrap()).unwrap();
     assert!(report["claims"].as_array().unwrap().iter().all(|c| c["confirmed"].is_boolean()));
 
     let modes = out.join("modes");
     let output = flapper(&["modes", "--policy", &policy, "--out", modes.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(modes.join("modes.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(modes.join("modes.json")).unwrap()).unwrap();
     assert_eq!(report["segments"].as_array().unwrap().len(), 4);
 }
 
@@ -264,10 +338,16 @@ fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
 fn analysis_commands_reject_bad_input_with_one_line() {
     let out = scratch("analysis-bad");
     let o = out.to_str().unwrap();
-    assert_one_line_error(&flapper(&["sysid", "--policy", "/no/such/policy.safetensors", "--out", o]), "/no/such/policy.safetensors");
+    assert_one_line_error(
+        &flapper(&["sysid", "--policy", "/no/such/policy.safetensors", "--out", o]),
+        "/no/such/policy.safetensors",
+    );
     let policy = shipped_policy("stage2");
     assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--amplitude-m", "5", "--out", o]), "--amplitude-m");
-    assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]), "--input-lead-s");
+    assert_one_line_error(
+        &flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]),
+        "--input-lead-s",
+    );
     assert_one_line_error(&flapper(&["phase", "--policy", &policy, "--speed-mps", "NaN", "--out", o]), "--speed-mps");
     // A perturbation the policy cannot follow is reported as such (after the progress line), not as a bad fit.
     let output = flapper(&["sysid", "--policy", &policy, "--amplitude-m", "1", "--out", o]);
@@ -294,14 +374,16 @@ fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
         assert_eq!(rows.iter().filter(|r| r[0] == coefficient).count(), 2, "{coefficient}");
     }
     for row in &rows {
-        let (episodes, successes, rate): (usize, usize, f64) = (row[2].parse().unwrap(), row[3].parse().unwrap(), row[4].parse().unwrap());
+        let (episodes, successes, rate): (usize, usize, f64) =
+            (row[2].parse().unwrap(), row[3].parse().unwrap(), row[4].parse().unwrap());
         assert_eq!(episodes, 2);
         assert!(successes <= episodes && rate == successes as f64 / episodes as f64, "{row:?}");
     }
     let wind = std::fs::read_to_string(out.join("robustness_wind.csv")).unwrap();
     assert!(wind.starts_with("wind_x_mps,wind_y_mps,wind_z_mps,episodes,successes,success_rate\n"), "{wind}");
     assert_eq!(wind.lines().count(), 1 + 21);
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("robustness.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("robustness.json")).unwrap()).unwrap();
     assert!(report["table_iii"].is_null() && report["envelope"].is_null(), "only the sweeps asked for");
     for file in ["robustness_fluid.svg", "robustness_wind.svg"] {
         assert!(out.join(file).metadata().unwrap().len() > 1000, "{file}");
@@ -343,7 +425,17 @@ fn eval_writes_what_the_policy_saw_and_did() {
     let out = scratch("observations");
     let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage2/policy.safetensors");
     let output = flapper(&[
-        "eval", "--policy", policy.to_str().unwrap(), "--reference", "cruise", "--episodes", "1", "--no-baseline", "--observations", "--out", out.to_str().unwrap(),
+        "eval",
+        "--policy",
+        policy.to_str().unwrap(),
+        "--reference",
+        "cruise",
+        "--episodes",
+        "1",
+        "--no-baseline",
+        "--observations",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let mut reader = csv::Reader::from_path(out.join("policy/observations.csv")).unwrap();
@@ -352,11 +444,17 @@ fn eval_writes_what_the_policy_saw_and_did() {
     let column = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"));
     let previous = column("t-0.action.flap_left");
     let action = column("action_q1");
-    let rows: Vec<Vec<f64>> = reader.records().map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> =
+        reader.records().map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect()).collect();
     let steps = std::fs::read_to_string(out.join("policy/steps.csv")).unwrap().lines().count() - 1;
     assert_eq!(rows.len(), steps, "one row per control step of episode 0");
     assert_eq!(rows[0][previous], 0.0);
     for pair in rows.windows(2) {
-        assert!((pair[1][previous] - pair[0][action].clamp(-1.0, 1.0)).abs() < 1e-6, "{} vs {}", pair[1][previous], pair[0][action]);
+        assert!(
+            (pair[1][previous] - pair[0][action].clamp(-1.0, 1.0)).abs() < 1e-6,
+            "{} vs {}",
+            pair[1][previous],
+            pair[0][action]
+        );
     }
 }

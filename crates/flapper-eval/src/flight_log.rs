@@ -125,7 +125,8 @@ impl FlightLog {
 
     /// Altitude lost and horizontal distance covered between two times (m).
     pub fn glide_between(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
-        let at = |t: f64| self.rows.iter().min_by(|a, b| (a.state.time_s - t).abs().total_cmp(&(b.state.time_s - t).abs()));
+        let at =
+            |t: f64| self.rows.iter().min_by(|a, b| (a.state.time_s - t).abs().total_cmp(&(b.state.time_s - t).abs()));
         match (at(t0_s), at(t1_s)) {
             (Some(a), Some(b)) => {
                 let delta: Vec3 = b.state.position_m - a.state.position_m;
@@ -157,14 +158,31 @@ impl FlightLog {
     /// and torque, then the mechanical power. SI units, angles in radians.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
         let rows = self.rows.iter().map(FlightCsvRow::of);
-        write_csv_rows(path, &Self::csv_header(), rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
+        write_csv_rows(path, &Self::csv_header(), rows)
+            .map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
     }
 
     /// The column names of [`FlightCsvRow`].
     fn csv_header() -> Vec<String> {
         let mut header: Vec<String> = [
-            "time_s", "x_m", "y_m", "z_m", "qw", "qx", "qy", "qz", "roll_rad", "pitch_rad", "yaw_rad", "vx_mps",
-            "vy_mps", "vz_mps", "airspeed_mps", "p_radps", "q_radps", "r_radps",
+            "time_s",
+            "x_m",
+            "y_m",
+            "z_m",
+            "qw",
+            "qx",
+            "qy",
+            "qz",
+            "roll_rad",
+            "pitch_rad",
+            "yaw_rad",
+            "vx_mps",
+            "vy_mps",
+            "vz_mps",
+            "airspeed_mps",
+            "p_radps",
+            "q_radps",
+            "r_radps",
         ]
         .map(String::from)
         .to_vec();

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Vec3};
 use flapper_plot::{COLORS, Curve, Panel};
+use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Vec3};
 
 use crate::OutputError;
 use crate::flight_log::FlightLog;
@@ -40,7 +40,11 @@ pub fn write_flight_plots(log: &FlightLog, dir: &Path, title: &str) -> Result<Ve
     let window: Vec<JointSample> = rows
         .iter()
         .filter(|r| r.state.time_s >= t_end - 1.0)
-        .map(|r| JointSample { time_s: r.state.time_s, angles_rad: r.state.joint_positions_rad, targets_rad: r.applied_rad })
+        .map(|r| JointSample {
+            time_s: r.state.time_s,
+            angles_rad: r.state.joint_positions_rad,
+            targets_rad: r.applied_rad,
+        })
         .collect();
     let joints_path = dir.join("joints.svg");
     write_joint_window(&window, "last 1 s", &joints_path)?;
@@ -73,8 +77,18 @@ pub(crate) fn write_joint_window(window: &[JointSample], when: &str, path: &Path
                     window.iter().map(|s| (s.time_s, f(s)[i].to_degrees())).collect::<Vec<_>>()
                 };
                 [
-                    Curve { label: joint.name().into(), points: series(|s| s.angles_rad), color: COLORS[k], dashed: false },
-                    Curve { label: format!("{} target", joint.name()), points: series(|s| s.targets_rad), color: COLORS[k], dashed: true },
+                    Curve {
+                        label: joint.name().into(),
+                        points: series(|s| s.angles_rad),
+                        color: COLORS[k],
+                        dashed: false,
+                    },
+                    Curve {
+                        label: format!("{} target", joint.name()),
+                        points: series(|s| s.targets_rad),
+                        color: COLORS[k],
+                        dashed: true,
+                    },
                 ]
             })
             .collect(),
@@ -98,7 +112,12 @@ pub fn write_path_views(points: &[Vec3], title: &str, path: &Path) -> Result<(),
         title: format!("{title}: {name}"),
         x_label: "x (m)",
         y_label,
-        curves: vec![Curve { label: "path".into(), points: points.iter().map(pick).collect(), color: COLORS[0], dashed: false }],
+        curves: vec![Curve {
+            label: "path".into(),
+            points: points.iter().map(pick).collect(),
+            color: COLORS[0],
+            dashed: false,
+        }],
         equal_aspect: true,
     };
     let top = view("top view", |p| (p.x, p.y), "y (m)");
@@ -107,5 +126,6 @@ pub fn write_path_views(points: &[Vec3], title: &str, path: &Path) -> Result<(),
 }
 
 fn draw(path: &Path, size: (u32, u32), panels: &[Panel], grid: (usize, usize)) -> Result<(), OutputError> {
-    flapper_plot::draw(path, size, panels, grid).map_err(|message| OutputError::Write { path: path.to_owned(), message })
+    flapper_plot::draw(path, size, panels, grid)
+        .map_err(|message| OutputError::Write { path: path.to_owned(), message })
 }

@@ -32,7 +32,8 @@ pub fn load_flight_policy(path: &Path) -> Result<(ActorCritic, TaskConfig), Poli
         None => toml::Table::new(),
     };
     let text = toml::to_string(&task_table).map_err(|e| parse(e.to_string()))?;
-    let task = TaskConfig::from_toml(&text, &origin).map_err(|source| PolicyFileError::Task { origin: origin.clone(), source })?;
+    let task = TaskConfig::from_toml(&text, &origin)
+        .map_err(|source| PolicyFileError::Task { origin: origin.clone(), source })?;
     let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
     loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
     Ok((loaded.policy, task))

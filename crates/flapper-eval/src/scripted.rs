@@ -102,7 +102,8 @@ impl Controller for ScriptedGait {
         // Roll right (right wing down): pitch the right wing up (negative) for more lift there.
         let differential = c.roll_gain * roll + c.roll_rate_gain * roll_rate;
         // Nose below the reference: tail trailing edge up (negative) to pitch up.
-        let tail = c.tail_trim_deg.to_radians() - c.pitch_gain * (c.body_pitch_deg.to_radians() - body_pitch)
+        let tail = c.tail_trim_deg.to_radians()
+            - c.pitch_gain * (c.body_pitch_deg.to_radians() - body_pitch)
             - c.pitch_rate_gain * pitch_rate_nose_down;
         [flap, pitch + differential, flap, pitch - differential, tail]
     }

@@ -51,8 +51,12 @@ mod tests {
         assert!((f.frequency_hz - 5.3).abs() < 0.06, "{f:?}");
         assert!(f.energy_fraction > 0.9, "{f:?}");
         // Equal amplitudes at 5 and 11 Hz: the peak holds about half the energy.
-        let two: Vec<f64> =
-            (0..1000).map(|k| (2.0 * std::f64::consts::PI * 5.0 * t(k)).sin() + 0.99 * (2.0 * std::f64::consts::PI * 11.0 * t(k)).sin()).collect();
+        let two: Vec<f64> = (0..1000)
+            .map(|k| {
+                (2.0 * std::f64::consts::PI * 5.0 * t(k)).sin()
+                    + 0.99 * (2.0 * std::f64::consts::PI * 11.0 * t(k)).sin()
+            })
+            .collect();
         let f = fundamental(&two, rate).unwrap();
         assert!((f.frequency_hz - 5.0).abs() < 0.06 && (f.energy_fraction - 0.5).abs() < 0.05, "{f:?}");
         assert!(fundamental(&[1.0; 100], rate).is_none());

@@ -8,9 +8,9 @@ use std::sync::Arc;
 use flapper_ppo::{ActorCritic, InferenceScratch};
 use flapper_sim::{ActuatedJoint, ModelError, N_ACTUATED_JOINTS, RobotModel, Vec3};
 use flapper_task::action::ActionMap;
+use flapper_task::config::RandomizationConfig;
 use flapper_task::reference::Reference;
 use flapper_task::termination::EpisodeEnd;
-use flapper_task::config::RandomizationConfig;
 use flapper_task::{FlightEnv, ReferenceSource, TaskConfig};
 use rayon::prelude::*;
 
@@ -110,7 +110,8 @@ impl EpisodeResult {
 
     /// The fundamental of `joint`'s angle after the first second (the launch transient).
     pub fn fundamental(&self, joint: ActuatedJoint, period_s: f64) -> Option<Fundamental> {
-        let signal: Vec<f64> = self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect();
+        let signal: Vec<f64> =
+            self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect();
         fundamental(&signal, 1.0 / period_s)
     }
 }
@@ -209,7 +210,12 @@ enum Flying<'a> {
     Scripted { gait: ScriptedGait, action_map: ActionMap },
 }
 
-fn fly_episode(mut env: FlightEnv, pilot: &Pilot, episode: usize, mut record: Option<&mut EpisodeRecord>) -> EpisodeResult {
+fn fly_episode(
+    mut env: FlightEnv,
+    pilot: &Pilot,
+    episode: usize,
+    mut record: Option<&mut EpisodeRecord>,
+) -> EpisodeResult {
     let mut flying = match pilot {
         Pilot::Policy(policy) => Flying::Policy {
             policy,

@@ -15,7 +15,8 @@ use crate::plots::{JointSample, write_joint_window};
 use crate::tracking::{EpisodeRecord, EpisodeResult, TrackingStep};
 
 /// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
-pub const ANALYSED_JOINTS: [ActuatedJoint; 3] = [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
+pub const ANALYSED_JOINTS: [ActuatedJoint; 3] =
+    [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
 
 /// Figures over all episodes of one pilot on one reference.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -71,7 +72,8 @@ impl ManoeuvreFigures {
         let through: Vec<&EpisodeResult> =
             results.iter().filter(|r| r.steps.last().is_some_and(|s| s.time_s >= end_s)).collect();
         let max_errors: Vec<f64> = through.iter().map(|r| r.max_error_between_m(start_s, end_s)).collect();
-        let mut rejoin: Vec<f64> = through.iter().filter_map(|r| r.time_to_rejoin_s(end_s, REJOIN_DISTANCE_M)).collect();
+        let mut rejoin: Vec<f64> =
+            through.iter().filter_map(|r| r.time_to_rejoin_s(end_s, REJOIN_DISTANCE_M)).collect();
         rejoin.sort_by(f64::total_cmp);
         let n = max_errors.len();
         Self {
@@ -146,10 +148,16 @@ impl TrackingSummary {
             ("episodes inverted (|roll| > 90 deg)".into(), format!("{}/{}", self.inverted_episodes, self.episodes)),
         ];
         if let Some(m) = &self.manoeuvre {
-            rows.push((format!("manoeuvre {:.1}-{:.1} s: flown through", m.start_s, m.end_s), format!("{}/{}", m.episodes, self.episodes)));
+            rows.push((
+                format!("manoeuvre {:.1}-{:.1} s: flown through", m.start_s, m.end_s),
+                format!("{}/{}", m.episodes, self.episodes),
+            ));
             let pair = |a: f64, b: f64| if a.is_nan() { "-".to_string() } else { format!("{a:.2} / {b:.2}") };
             rows.push(("  max error in it (m), mean / worst".into(), pair(m.mean_max_error_m, m.worst_max_error_m)));
-            rows.push((format!("  back within {REJOIN_DISTANCE_M} m after (s), median / worst"), pair(m.median_rejoin_s, m.worst_rejoin_s)));
+            rows.push((
+                format!("  back within {REJOIN_DISTANCE_M} m after (s), median / worst"),
+                pair(m.median_rejoin_s, m.worst_rejoin_s),
+            ));
             rows.push(("  never back within it".into(), m.never_rejoined.to_string()));
         }
         for (k, joint) in ANALYSED_JOINTS.iter().enumerate() {
@@ -211,8 +219,19 @@ impl StepRow {
 /// The column names of [`StepRow`].
 fn steps_csv_header() -> Vec<String> {
     let mut header: Vec<String> = [
-        "episode", "time_s", "x_m", "y_m", "z_m", "target_x_m", "target_y_m", "target_z_m", "error_m", "airspeed_mps", "roll_rad",
-        "pitch_rad", "yaw_rad",
+        "episode",
+        "time_s",
+        "x_m",
+        "y_m",
+        "z_m",
+        "target_x_m",
+        "target_y_m",
+        "target_z_m",
+        "error_m",
+        "airspeed_mps",
+        "roll_rad",
+        "pitch_rad",
+        "yaw_rad",
     ]
     .map(String::from)
     .to_vec();
@@ -227,32 +246,58 @@ fn steps_csv_header() -> Vec<String> {
 /// One row per control step of every episode.
 pub fn write_steps_csv(results: &[EpisodeResult], path: &Path) -> Result<(), OutputError> {
     let rows = results.iter().flat_map(|r| &r.steps).map(StepRow::of);
-    write_csv_rows(path, &steps_csv_header(), rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
+    write_csv_rows(path, &steps_csv_header(), rows)
+        .map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 /// Writes `path_3d.svg`, `path.svg` (top and side views), `error.svg` and `joints.svg` for the first
 /// `shown` episodes of `results` into `dir`; returns their paths.
-pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, shown: usize) -> Result<Vec<PathBuf>, OutputError> {
+pub fn write_tracking_plots(
+    results: &[EpisodeResult],
+    title: &str,
+    dir: &Path,
+    shown: usize,
+) -> Result<Vec<PathBuf>, OutputError> {
     let draw = |path: &Path, size, panels: &[Panel], grid| {
-        flapper_plot::draw(path, size, panels, grid).map_err(|message| OutputError::Write { path: path.to_owned(), message })
+        flapper_plot::draw(path, size, panels, grid)
+            .map_err(|message| OutputError::Write { path: path.to_owned(), message })
     };
     let shown: Vec<&EpisodeResult> = results.iter().take(shown.max(1)).collect();
     let Some(first) = shown.first() else { return Ok(Vec::new()) };
-    let curve = |label: String, points: Vec<(f64, f64)>, k: usize, dashed| Curve { label, points, color: COLORS[k % COLORS.len()], dashed };
+    let curve = |label: String, points: Vec<(f64, f64)>, k: usize, dashed| Curve {
+        label,
+        points,
+        color: COLORS[k % COLORS.len()],
+        dashed,
+    };
     let view = |name: &str, pick: fn(&flapper_sim::Vec3) -> (f64, f64), y_label| {
-        let mut curves = vec![curve("reference".into(), first.steps.iter().map(|s| pick(&s.target_m)).collect(), 0, true)];
+        let mut curves =
+            vec![curve("reference".into(), first.steps.iter().map(|s| pick(&s.target_m)).collect(), 0, true)];
         for (k, r) in shown.iter().enumerate() {
-            curves.push(curve(format!("episode {}", k), r.steps.iter().map(|s| pick(&s.position_m)).collect(), k + 1, false));
+            curves.push(curve(
+                format!("episode {}", k),
+                r.steps.iter().map(|s| pick(&s.position_m)).collect(),
+                k + 1,
+                false,
+            ));
         }
         Panel { title: format!("{title}: {name}"), x_label: "x (m)", y_label, curves, equal_aspect: true }
     };
     let path_views = dir.join("path.svg");
-    draw(&path_views, (1100, 900), &[view("top view", |p| (p.x, p.y), "y (m)"), view("side view", |p| (p.x, p.z), "z (m)")], (2, 1))?;
+    draw(
+        &path_views,
+        (1100, 900),
+        &[view("top view", |p| (p.x, p.y), "y (m)"), view("side view", |p| (p.x, p.z), "z (m)")],
+        (2, 1),
+    )?;
 
     let path_3d = dir.join("path_3d.svg");
-    let reference: Vec<(f64, f64, f64)> = first.steps.iter().map(|s| (s.target_m.x, s.target_m.y, s.target_m.z)).collect();
-    let flown: Vec<Vec<(f64, f64, f64)>> =
-        shown.iter().map(|r| r.steps.iter().map(|s| (s.position_m.x, s.position_m.y, s.position_m.z)).collect()).collect();
+    let reference: Vec<(f64, f64, f64)> =
+        first.steps.iter().map(|s| (s.target_m.x, s.target_m.y, s.target_m.z)).collect();
+    let flown: Vec<Vec<(f64, f64, f64)>> = shown
+        .iter()
+        .map(|r| r.steps.iter().map(|s| (s.position_m.x, s.position_m.y, s.position_m.z)).collect())
+        .collect();
     flapper_plot::draw_paths_3d(&path_3d, &format!("{title}: path (dashed: reference)"), &reference, &flown)
         .map_err(|message| OutputError::Write { path: path_3d.clone(), message })?;
 
@@ -262,7 +307,18 @@ pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, 
         .enumerate()
         .map(|(k, r)| curve(format!("episode {k}"), r.steps.iter().map(|s| (s.time_s, s.error_m)).collect(), k, false))
         .collect();
-    draw(&error, (1000, 450), &[Panel { title: format!("{title}: position error"), x_label: "time (s)", y_label: "error (m)", curves, equal_aspect: false }], (1, 1))?;
+    draw(
+        &error,
+        (1000, 450),
+        &[Panel {
+            title: format!("{title}: position error"),
+            x_label: "time (s)",
+            y_label: "error (m)",
+            curves,
+            equal_aspect: false,
+        }],
+        (1, 1),
+    )?;
 
     // One second in the middle of the first episode (the paper's Fig. 3).
     let t_mid = first.steps.last().map_or(0.0, |s| s.time_s) / 2.0;
@@ -276,17 +332,23 @@ pub fn write_tracking_plots(results: &[EpisodeResult], title: &str, dir: &Path, 
     write_joint_window(&window, "one second of episode 0", &joints)?;
 
     let attitude = dir.join("attitude.svg");
-    let over_time = |name: &str, y_label, value: fn(&crate::tracking::TrackingStep) -> f64, with_reference: Option<fn(&crate::tracking::TrackingStep) -> f64>| {
-        let mut curves: Vec<Curve> = shown
-            .iter()
-            .enumerate()
-            .map(|(k, r)| curve(format!("episode {k}"), r.steps.iter().map(|s| (s.time_s, value(s))).collect(), k + 1, false))
-            .collect();
-        if let Some(target) = with_reference {
-            curves.insert(0, curve("reference".into(), first.steps.iter().map(|s| (s.time_s, target(s))).collect(), 0, true));
-        }
-        Panel { title: format!("{title}: {name}"), x_label: "time (s)", y_label, curves, equal_aspect: false }
-    };
+    let over_time =
+        |name: &str, y_label, value: fn(&TrackingStep) -> f64, with_reference: Option<fn(&TrackingStep) -> f64>| {
+            let mut curves: Vec<Curve> = shown
+                .iter()
+                .enumerate()
+                .map(|(k, r)| {
+                    curve(format!("episode {k}"), r.steps.iter().map(|s| (s.time_s, value(s))).collect(), k + 1, false)
+                })
+                .collect();
+            if let Some(target) = with_reference {
+                curves.insert(
+                    0,
+                    curve("reference".into(), first.steps.iter().map(|s| (s.time_s, target(s))).collect(), 0, true),
+                );
+            }
+            Panel { title: format!("{title}: {name}"), x_label: "time (s)", y_label, curves, equal_aspect: false }
+        };
     let panels = [
         over_time("altitude", "z (m)", |s| s.position_m.z, Some(|s| s.target_m.z)),
         over_time("airspeed (pitot)", "m/s", |s| s.airspeed_mps, None),
@@ -302,9 +364,11 @@ pub fn write_summary_csv(summaries: &[(&str, TrackingSummary)], path: &Path) -> 
     let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
     let tables: Vec<Vec<(String, String)>> = summaries.iter().map(|(_, s)| s.rows()).collect();
     let mut out = csv::Writer::from_writer(Vec::new());
-    out.write_record(std::iter::once("metric").chain(summaries.iter().map(|(name, _)| *name))).map_err(|e| error(&e))?;
+    out.write_record(std::iter::once("metric").chain(summaries.iter().map(|(name, _)| *name)))
+        .map_err(|e| error(&e))?;
     for (k, (label, _)) in tables.first().map_or(&[][..], Vec::as_slice).iter().enumerate() {
-        out.write_record(std::iter::once(label.as_str()).chain(tables.iter().map(|t| t[k].1.as_str()))).map_err(|e| error(&e))?;
+        out.write_record(std::iter::once(label.as_str()).chain(tables.iter().map(|t| t[k].1.as_str())))
+            .map_err(|e| error(&e))?;
     }
     let bytes = out.into_inner().map_err(|e| error(&e))?;
     flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
@@ -327,5 +391,6 @@ pub fn write_observations_csv(record: &EpisodeRecord, names: &[String], path: &P
     header.extend((1..=record.actions.first().map_or(N_ACTUATED_JOINTS, Vec::len)).map(|k| format!("action_q{k}")));
     let rows = record.observations.iter().zip(&record.actions).enumerate();
     let rows = rows.map(|(step, (observation, action))| ObservationRow { step, observation, action });
-    write_csv_rows(path, &header, rows).map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
+    write_csv_rows(path, &header, rows)
+        .map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
 }

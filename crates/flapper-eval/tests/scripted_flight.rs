@@ -70,7 +70,8 @@ fn a_roll_disturbance_dies_out_and_the_flight_stays_level() {
     assert!(log.fault().is_none());
     let s = log.summary();
     assert!(s.max_altitude_deviation_m < 0.5, "altitude deviation {:.2} m", s.max_altitude_deviation_m);
-    let late_roll = log.rows().iter().filter(|r| r.state.time_s > 3.0).map(|r| r.state.euler_rad[0].abs()).fold(0.0, f64::max);
+    let late_roll =
+        log.rows().iter().filter(|r| r.state.time_s > 3.0).map(|r| r.state.euler_rad[0].abs()).fold(0.0, f64::max);
     assert!(late_roll < 2f64.to_radians(), "roll still {:.1} deg after 3 s", late_roll.to_degrees());
 }
 

@@ -7,11 +7,11 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
 use flapper_sim::{RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::reference::named::named;
-use flapper_eval::load_flight_policy;
 
 /// The shipped policy of `stage`, its task, and the named `reference` with the policy's lookahead.
 fn shipped(stage: &str, reference: &str) -> (RobotModel, Pilot, TaskConfig, Arc<flapper_task::reference::Reference>) {
@@ -25,7 +25,13 @@ fn shipped(stage: &str, reference: &str) -> (RobotModel, Pilot, TaskConfig, Arc<
 
 /// Flies `reference` from `starts` randomized starts (seed 7): at least `min_completed` complete, each
 /// with an RMS error below `max_rms_m`.
-fn check_tracks(stage: &str, reference: &str, starts: usize, min_completed: usize, max_rms_m: f64) -> Vec<EpisodeResult> {
+fn check_tracks(
+    stage: &str,
+    reference: &str,
+    starts: usize,
+    min_completed: usize,
+    max_rms_m: f64,
+) -> Vec<EpisodeResult> {
     let (robot, pilot, task, path) = shipped(stage, reference);
     let results = evaluate_tracking(&robot, &pilot, &task, path, starts, 7).unwrap();
     let completed: Vec<_> = results.iter().filter(|r| r.completed()).collect();
@@ -78,6 +84,9 @@ fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
 fn the_shipped_stage_4_policy_flies_the_aerobatic_chain_and_the_sharp_turn() {
     // The final controller (`make demo`): 95/100 on `aerobatic` and 99/100 on `sharp-turn` (seed 11).
     let results = check_tracks("stage4", "aerobatic", 4, 3, 1.0);
-    assert!(results.iter().filter(|r| r.completed()).all(|r| r.went_inverted()), "the aerobatic chain's loop goes over the top");
+    assert!(
+        results.iter().filter(|r| r.completed()).all(|r| r.went_inverted()),
+        "the aerobatic chain's loop goes over the top"
+    );
     check_tracks("stage4", "sharp-turn", 4, 4, 1.0);
 }

@@ -13,7 +13,8 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut temporary = path.as_os_str().to_owned();
     temporary.push(format!(".tmp-{}", std::process::id()));
     let temporary = PathBuf::from(temporary);
-    let written = std::fs::File::create(&temporary).and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()));
+    let written =
+        std::fs::File::create(&temporary).and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()));
     let result = written.and_then(|()| std::fs::rename(&temporary, path));
     if result.is_err() {
         let _ = std::fs::remove_file(&temporary);
@@ -23,7 +24,11 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// Writes `header`, then one record per row, to `path` as CSV, whole or not at all. A row's field may
 /// hold several columns (an array: each joint's angle), which is why the header is given, not derived.
-pub fn write_csv_rows<R: serde::Serialize>(path: &Path, header: &[String], rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
+pub fn write_csv_rows<R: serde::Serialize>(
+    path: &Path,
+    header: &[String],
+    rows: impl IntoIterator<Item = R>,
+) -> csv::Result<()> {
     write_csv(path, Some(header), rows)
 }
 
@@ -33,7 +38,11 @@ pub fn write_csv_records<R: serde::Serialize>(path: &Path, rows: impl IntoIterat
     write_csv(path, None, rows)
 }
 
-fn write_csv<R: serde::Serialize>(path: &Path, header: Option<&[String]>, rows: impl IntoIterator<Item = R>) -> csv::Result<()> {
+fn write_csv<R: serde::Serialize>(
+    path: &Path,
+    header: Option<&[String]>,
+    rows: impl IntoIterator<Item = R>,
+) -> csv::Result<()> {
     let mut out = csv::WriterBuilder::new().has_headers(header.is_none()).from_writer(Vec::new());
     if let Some(header) = header {
         out.write_record(header)?;
@@ -92,7 +101,8 @@ mod tests {
         let blocked = dir.join("blocked");
         std::fs::create_dir_all(blocked.join("inside")).unwrap();
         assert!(write_atomically(&blocked, b"x").is_err());
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let names: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -30,8 +30,13 @@ pub struct Panel<'a> {
     pub equal_aspect: bool,
 }
 
-pub const COLORS: [RGBColor; 5] =
-    [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(255, 127, 14), RGBColor(148, 103, 189)];
+pub const COLORS: [RGBColor; 5] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+];
 
 /// Draws `panels` on a `grid` of (rows, columns) into an SVG file of `size` pixels; the error is a
 /// message for the caller to put next to the path.
@@ -80,7 +85,8 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
     chart.configure_mesh().x_desc(panel.x_label).y_desc(panel.y_label).light_line_style(WHITE.mix(0.0)).draw()?;
     for curve in &panel.curves {
         let color = curve.color;
-        let style = ShapeStyle { color: color.to_rgba(), filled: false, stroke_width: if curve.dashed { 1 } else { 2 } };
+        let style =
+            ShapeStyle { color: color.to_rgba(), filled: false, stroke_width: if curve.dashed { 1 } else { 2 } };
         let width = style.stroke_width;
         let series = if curve.dashed {
             chart.draw_series(DashedLineSeries::new(curve.points.iter().copied(), 6, 4, style))?
@@ -89,7 +95,9 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
         };
         // A curve without a label stays out of the legend (one entry for several pieces of a kind).
         if !curve.label.is_empty() {
-            series.label(curve.label.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(width)));
+            series
+                .label(curve.label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(width)));
         }
     }
     if panel.curves.iter().filter(|c| !c.label.is_empty()).count() > 1 {
@@ -99,9 +107,17 @@ fn draw_panel(area: &DrawingArea<SVGBackend, Shift>, panel: &Panel) -> Result<()
 }
 
 /// Draws a dashed `reference` path and the `flown` paths in 3-D (x, y, z in metres) into an SVG file.
-pub fn draw_paths_3d(path: &Path, title: &str, reference: &[(f64, f64, f64)], flown: &[Vec<(f64, f64, f64)>]) -> Result<(), String> {
+pub fn draw_paths_3d(
+    path: &Path,
+    title: &str,
+    reference: &[(f64, f64, f64)],
+    flown: &[Vec<(f64, f64, f64)>],
+) -> Result<(), String> {
     let error = |e: &dyn std::fmt::Display| e.to_string();
-    let all = reference.iter().chain(flown.iter().flatten()).filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite());
+    let all = reference
+        .iter()
+        .chain(flown.iter().flatten())
+        .filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite());
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in all {
         for (k, v) in [p.0, p.1, p.2].into_iter().enumerate() {

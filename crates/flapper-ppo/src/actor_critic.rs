@@ -25,7 +25,10 @@ impl ActorCritic {
     /// the first actions are near zero and the noise explores around them).
     pub fn new(observation_size: usize, action_size: usize, config: &PpoConfig, rng: &mut impl Rng) -> Self {
         let sizes = |hidden: &[usize], out: usize| {
-            std::iter::once(observation_size).chain(hidden.iter().copied()).chain(std::iter::once(out)).collect::<Vec<_>>()
+            std::iter::once(observation_size)
+                .chain(hidden.iter().copied())
+                .chain(std::iter::once(out))
+                .collect::<Vec<_>>()
         };
         Self {
             actor: Mlp::new(&sizes(&config.actor_hidden, action_size), config.activation, 0.01, rng),

@@ -120,7 +120,12 @@ pub struct Checkpoint {
 
 impl Checkpoint {
     /// Rejects a file whose networks do not fit `observation_size` inputs and `action_size` outputs.
-    pub fn check_layout(&self, path: &Path, observation_size: usize, action_size: usize) -> Result<(), CheckpointError> {
+    pub fn check_layout(
+        &self,
+        path: &Path,
+        observation_size: usize,
+        action_size: usize,
+    ) -> Result<(), CheckpointError> {
         let (o, a) = (self.info.observation_size, self.info.action_size);
         if (o, a) != (observation_size, action_size) {
             return Err(CheckpointError::Layout {
@@ -139,7 +144,14 @@ impl Checkpoint {
 }
 
 /// Describes `ppo` for a file of `kind`.
-pub fn describe(ppo: &Ppo, kind: CheckpointKind, iteration: usize, env_steps: u64, wall_time_s: f64, config_toml: &str) -> CheckpointInfo {
+pub fn describe(
+    ppo: &Ppo,
+    kind: CheckpointKind,
+    iteration: usize,
+    env_steps: u64,
+    wall_time_s: f64,
+    config_toml: &str,
+) -> CheckpointInfo {
     let policy = &ppo.policy;
     CheckpointInfo {
         format_version: FORMAT_VERSION,
@@ -218,7 +230,8 @@ pub fn sidecar_path(path: &Path) -> PathBuf {
 
 /// Writes `bytes` to `path` whole or not at all ([`flapper_files::write_atomically`]).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError> {
-    flapper_files::write_atomically(path, bytes).map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
+    flapper_files::write_atomically(path, bytes)
+        .map_err(|source| CheckpointError::Write { path: path.to_owned(), source })
 }
 
 /// Writes the networks of the checkpoint (or policy) at `from` as a policy file at `to`, which must
@@ -255,7 +268,11 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         let view = tensors.tensor(name).map_err(|_| format(format!("tensor '{name}' missing")))?;
         let count: usize = view.shape().iter().product();
         if view.dtype() != dtype || count != len {
-            return Err(format(format!("tensor '{name}' is {:?} {:?}, expected {dtype:?} of {len}", view.dtype(), view.shape())));
+            return Err(format(format!(
+                "tensor '{name}' is {:?} {:?}, expected {dtype:?} of {len}",
+                view.dtype(),
+                view.shape()
+            )));
         }
         Ok(view.data().to_vec())
     };
@@ -263,12 +280,16 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         Ok(read(name, Dtype::F32, len)?.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
     };
     let read_f64 = |name: &str, len: usize| -> Result<Vec<f64>, CheckpointError> {
-        Ok(read(name, Dtype::F64, len)?.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect())
+        Ok(read(name, Dtype::F64, len)?
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+            .collect())
     };
     let network = |prefix: &str, sizes: &[usize]| -> Result<Mlp, CheckpointError> {
         let shape_error = || format(format!("{prefix} sizes {sizes:?} are not a network"));
-        let template = Mlp::with_params(sizes, info.activation, vec![0.0; parameter_count(sizes).ok_or_else(shape_error)?])
-            .ok_or_else(shape_error)?;
+        let template =
+            Mlp::with_params(sizes, info.activation, vec![0.0; parameter_count(sizes).ok_or_else(shape_error)?])
+                .ok_or_else(shape_error)?;
         let mut params = vec![0.0; template.params().len()];
         for t in template.tensors() {
             let name = format!("{prefix}.{}", t.name);
@@ -337,7 +358,10 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         return Err(format(format!("tensor 'normalizer.variance' holds a negative variance {v}")));
     }
     if !(normalizer.count.is_finite() && normalizer.count >= 0.0) {
-        return Err(format(format!("tensor 'normalizer.count' is {} (must be finite and non-negative)", normalizer.count)));
+        return Err(format(format!(
+            "tensor 'normalizer.count' is {} (must be finite and non-negative)",
+            normalizer.count
+        )));
     }
     if let Some(o) = &optimizer {
         for (name, adam) in [("actor", &o.actor), ("critic", &o.critic), ("log_std", &o.log_std)] {

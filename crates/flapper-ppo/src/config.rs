@@ -113,7 +113,11 @@ impl Default for RunnerConfig {
 impl PpoConfig {
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         let invalid = |key, value: String, why| Err(InvalidSetting { key, value, why });
-        for (key, value) in [("ppo.steps_per_env", self.steps_per_env), ("ppo.epochs", self.epochs), ("ppo.minibatches", self.minibatches)] {
+        for (key, value) in [
+            ("ppo.steps_per_env", self.steps_per_env),
+            ("ppo.epochs", self.epochs),
+            ("ppo.minibatches", self.minibatches),
+        ] {
             if value == 0 {
                 return invalid(key, "0".into(), "must be at least 1");
             }
@@ -140,9 +144,17 @@ impl PpoConfig {
                 return invalid(key, value.to_string(), "must be in [0, 1]");
             }
         }
-        for (key, value, max) in [("ppo.steps_per_env", self.steps_per_env, 10_000), ("ppo.epochs", self.epochs, 1000), ("ppo.minibatches", self.minibatches, 100_000)] {
+        for (key, value, max) in [
+            ("ppo.steps_per_env", self.steps_per_env, 10_000),
+            ("ppo.epochs", self.epochs, 1000),
+            ("ppo.minibatches", self.minibatches, 100_000),
+        ] {
             if value > max {
-                return invalid(key, value.to_string(), "too large (steps_per_env <= 10000, epochs <= 1000, minibatches <= 100000)");
+                return invalid(
+                    key,
+                    value.to_string(),
+                    "too large (steps_per_env <= 10000, epochs <= 1000, minibatches <= 100000)",
+                );
             }
         }
         for (key, value, max) in [
@@ -155,7 +167,11 @@ impl PpoConfig {
             ("ppo.entropy_coef", self.entropy_coef, 1e3),
         ] {
             if value > max {
-                return invalid(key, value.to_string(), "too large (clip <= 10, max_grad_norm <= 1e6, learning_rate <= 1, desired_kl <= 10, init_noise_std <= 100, coefficients <= 1000)");
+                return invalid(
+                    key,
+                    value.to_string(),
+                    "too large (clip <= 10, max_grad_norm <= 1e6, learning_rate <= 1, desired_kl <= 10, init_noise_std <= 100, coefficients <= 1000)",
+                );
             }
         }
         for (key, sizes) in [("ppo.actor_hidden", &self.actor_hidden), ("ppo.critic_hidden", &self.critic_hidden)] {
@@ -177,7 +193,11 @@ impl RunnerConfig {
             return invalid("runner.iterations", self.iterations.to_string(), "must be 1 to 10000000");
         }
         if self.envs * ppo.steps_per_env > 4_000_000 {
-            return invalid("ppo.steps_per_env", ppo.steps_per_env.to_string(), "envs x steps_per_env must be at most 4000000 samples per rollout");
+            return invalid(
+                "ppo.steps_per_env",
+                ppo.steps_per_env.to_string(),
+                "envs x steps_per_env must be at most 4000000 samples per rollout",
+            );
         }
         if self.checkpoint_every == 0 {
             return invalid("runner.checkpoint_every", "0".into(), "must be at least 1");
@@ -191,7 +211,11 @@ impl RunnerConfig {
             return invalid("runner.init_from_noise_std", std.to_string(), "must be in (0, 10]");
         }
         if self.envs * ppo.steps_per_env < ppo.minibatches {
-            return invalid("ppo.minibatches", ppo.minibatches.to_string(), "more minibatches than samples per rollout");
+            return invalid(
+                "ppo.minibatches",
+                ppo.minibatches.to_string(),
+                "more minibatches than samples per rollout",
+            );
         }
         Ok(())
     }

@@ -26,8 +26,11 @@ impl Gradients {
     /// Scales all gradients together so their global L2 norm is at most `max_norm`; returns the norm
     /// before clipping.
     pub fn clip_global_norm(&mut self, max_norm: f32) -> f32 {
-        let squares: f64 =
-            [&self.actor, &self.critic, &self.log_std].iter().flat_map(|g| g.iter()).map(|&g| (g as f64) * (g as f64)).sum();
+        let squares: f64 = [&self.actor, &self.critic, &self.log_std]
+            .iter()
+            .flat_map(|g| g.iter())
+            .map(|&g| (g as f64) * (g as f64))
+            .sum();
         let norm = squares.sqrt() as f32;
         if norm > max_norm {
             let scale = max_norm / (norm + 1e-6);
@@ -104,7 +107,8 @@ pub fn loss_and_gradients(
         )
     };
     terms.value = value_loss;
-    terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value - config.entropy_coef as f64 * terms.entropy;
+    terms.total =
+        terms.surrogate + config.value_loss_coef as f64 * terms.value - config.entropy_coef as f64 * terms.entropy;
     terms
 }
 
@@ -141,7 +145,8 @@ fn policy_loss(
             let diff = action[j] - mu[j];
             log_prob -= 0.5 * diff * diff * inv_var[j];
             let mean_shift = old_mu[j] - mu[j];
-            kl += policy.log_std[j] - batch.old_log_std[j] + (old_var[j] + mean_shift * mean_shift) * 0.5 * inv_var[j] - 0.5;
+            kl += policy.log_std[j] - batch.old_log_std[j] + (old_var[j] + mean_shift * mean_shift) * 0.5 * inv_var[j]
+                - 0.5;
         }
         let ratio = (log_prob - batch.old_log_probs[i]).exp();
         let advantage = batch.advantages[i];
@@ -243,7 +248,9 @@ mod tests {
         let std = 0.6f32;
         let actions: Vec<f32> = means.iter().map(|m| m + std * rng.random_range(-1.5..1.5)).collect();
         let log_prob = |i: usize| -> f32 {
-            (0..3).map(|j| -0.5 * ((actions[i * 3 + j] - means[i * 3 + j]) / std).powi(2) - std.ln() - HALF_LN_2PI).sum()
+            (0..3)
+                .map(|j| -0.5 * ((actions[i * 3 + j] - means[i * 3 + j]) / std).powi(2) - std.ln() - HALF_LN_2PI)
+                .sum()
         };
         let old_log_probs: Vec<f32> = (0..n).map(|i| log_prob(i) + rng.random_range(-0.5..0.5)).collect();
         let old_means: Vec<f32> = means.iter().map(|m| m + rng.random_range(-0.2..0.2)).collect();
@@ -276,7 +283,11 @@ mod tests {
         let (mut policy, config, batch) = setup(clipped_value_loss);
         let mut grads = Gradients::zeros(&policy);
         let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
-        assert!(terms.clip_fraction > 0.1 && terms.clip_fraction < 0.9, "both sides of the clip: {}", terms.clip_fraction);
+        assert!(
+            terms.clip_fraction > 0.1 && terms.clip_fraction < 0.9,
+            "both sides of the clip: {}",
+            terms.clip_fraction
+        );
         let eps = 2e-3f32;
         let compare = |name: &str, analytic: &[f32], numeric: &[f64]| {
             let worst = analytic
@@ -298,7 +309,8 @@ mod tests {
         }
         compare("log_std", &grads.log_std, &numeric);
         for which in ["actor", "critic"] {
-            let tensors = if which == "actor" { policy.actor.tensors().to_vec() } else { policy.critic.tensors().to_vec() };
+            let tensors =
+                if which == "actor" { policy.actor.tensors().to_vec() } else { policy.critic.tensors().to_vec() };
             for tensor in tensors {
                 let mut numeric = Vec::new();
                 for i in tensor.range.clone() {
@@ -310,7 +322,11 @@ mod tests {
                     *param_mut(&mut policy, which, i) = original;
                     numeric.push((up - down) / (2.0 * eps as f64));
                 }
-                let analytic = if which == "actor" { &grads.actor[tensor.range.clone()] } else { &grads.critic[tensor.range.clone()] };
+                let analytic = if which == "actor" {
+                    &grads.actor[tensor.range.clone()]
+                } else {
+                    &grads.critic[tensor.range.clone()]
+                };
                 compare(&format!("{which}.{}", tensor.name), analytic, &numeric);
             }
         }

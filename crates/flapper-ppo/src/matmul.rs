@@ -90,12 +90,30 @@ mod tests {
         for (at, bt) in [(false, false), (true, false), (false, true), (true, true)] {
             for threads in [1, 2] {
                 let mut c = vec![1.0; m * n];
-                matmul(&mut c, &a, &b, m, n, k, Product { a_transposed: at, b_transposed: bt, accumulate: false }, threads);
+                matmul(
+                    &mut c,
+                    &a,
+                    &b,
+                    m,
+                    n,
+                    k,
+                    Product { a_transposed: at, b_transposed: bt, accumulate: false },
+                    threads,
+                );
                 let expected = naive(&a, &b, m, n, k, at, bt);
                 for (x, y) in c.iter().zip(&expected) {
                     assert!((x - y).abs() < 1e-5, "{at} {bt}: {x} vs {y}");
                 }
-                matmul(&mut c, &a, &b, m, n, k, Product { a_transposed: at, b_transposed: bt, accumulate: true }, threads);
+                matmul(
+                    &mut c,
+                    &a,
+                    &b,
+                    m,
+                    n,
+                    k,
+                    Product { a_transposed: at, b_transposed: bt, accumulate: true },
+                    threads,
+                );
                 for (x, y) in c.iter().zip(&expected) {
                     assert!((x - 2.0 * y).abs() < 1e-5, "accumulate {at} {bt}");
                 }

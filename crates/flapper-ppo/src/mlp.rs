@@ -98,8 +98,12 @@ impl Mlp {
             return None;
         }
         let tensors = tensor_layout(sizes);
-        (tensors.last().map_or(0, |t| t.range.end) == params.len())
-            .then(|| Self { sizes: sizes.to_vec(), activation, params, tensors })
+        (tensors.last().map_or(0, |t| t.range.end) == params.len()).then(|| Self {
+            sizes: sizes.to_vec(),
+            activation,
+            params,
+            tensors,
+        })
     }
 
     pub fn sizes(&self) -> &[usize] {
@@ -184,7 +188,16 @@ impl Mlp {
             if layer > 0 {
                 // delta_prev [batch x in] = delta [batch x out] * W [out x in], times the activation's slope.
                 ws.delta_next.resize(batch * fan_in, 0.0);
-                matmul(&mut ws.delta_next, &ws.delta, &self.params[weight], batch, fan_in, fan_out, Product::PLAIN, threads);
+                matmul(
+                    &mut ws.delta_next,
+                    &ws.delta,
+                    &self.params[weight],
+                    batch,
+                    fan_in,
+                    fan_out,
+                    Product::PLAIN,
+                    threads,
+                );
                 self.activation.backpropagate(&mut ws.delta_next, previous);
                 std::mem::swap(&mut ws.delta, &mut ws.delta_next);
             }
@@ -199,7 +212,11 @@ fn tensor_layout(sizes: &[usize]) -> Vec<Tensor> {
     for (layer, pair) in sizes.windows(2).enumerate() {
         let (fan_in, fan_out) = (pair[0], pair[1]);
         let index = 2 * layer;
-        tensors.push(Tensor { name: format!("{index}.weight"), shape: vec![fan_out, fan_in], range: offset..offset + fan_in * fan_out });
+        tensors.push(Tensor {
+            name: format!("{index}.weight"),
+            shape: vec![fan_out, fan_in],
+            range: offset..offset + fan_in * fan_out,
+        });
         offset += fan_in * fan_out;
         tensors.push(Tensor { name: format!("{index}.bias"), shape: vec![fan_out], range: offset..offset + fan_out });
         offset += fan_out;

@@ -11,8 +11,8 @@ use rand_distr::StandardNormal;
 use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
 use crate::adam::Adam;
 use crate::config::{PpoConfig, Schedule};
-use crate::mlp::Workspace;
 use crate::loss::{Gradients, LossScratch, Minibatch, loss_and_gradients};
+use crate::mlp::Workspace;
 use crate::storage::{RolloutStorage, Transition};
 
 /// Adam state for every parameter of the policy (one optimizer over all, as in rsl_rl, kept as
@@ -104,9 +104,15 @@ impl Ppo {
         let (policy, normalized, threads) = (&self.policy, &self.normalized, self.threads);
         let (actor_ws, critic_ws) = (&mut self.actor_ws, &mut self.critic_ws);
         let (means, values) = if threads >= 2 {
-            rayon::join(|| policy.actor.forward(normalized, envs, actor_ws, 1), || policy.critic.forward(normalized, envs, critic_ws, 1))
+            rayon::join(
+                || policy.actor.forward(normalized, envs, actor_ws, 1),
+                || policy.critic.forward(normalized, envs, critic_ws, 1),
+            )
         } else {
-            (policy.actor.forward(normalized, envs, actor_ws, threads), policy.critic.forward(normalized, envs, critic_ws, threads))
+            (
+                policy.actor.forward(normalized, envs, actor_ws, threads),
+                policy.critic.forward(normalized, envs, critic_ws, threads),
+            )
         };
         let t = &mut self.transition;
         t.observations.clone_from(&self.normalized);
@@ -134,7 +140,13 @@ impl Ppo {
     /// Records the environments' answer to the last `act` and stores the step's transition. A
     /// truncated episode's reward gains gamma times the value of its final observation (its future
     /// was cut, not zero).
-    pub fn process_step(&mut self, rewards: &[f32], terminated: &[bool], truncated: &[bool], final_observations: &[f32]) {
+    pub fn process_step(
+        &mut self,
+        rewards: &[f32],
+        terminated: &[bool],
+        truncated: &[bool],
+        final_observations: &[f32],
+    ) {
         let o_size = self.policy.observation_size();
         let t = &mut self.transition;
         t.rewards.clear();

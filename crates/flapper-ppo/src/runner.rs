@@ -28,19 +28,29 @@ pub enum TrainError {
     Env(EnvError),
     #[error("'{0}' already holds a training run; pass --resume to continue it or choose another --out")]
     RunExists(PathBuf),
-    #[error("'{dir}' already holds {file}, which a new run would overwrite; give --out a new or empty folder (or move the file)")]
+    #[error(
+        "'{dir}' already holds {file}, which a new run would overwrite; give --out a new or empty folder (or move the file)"
+    )]
     WouldOverwrite { dir: PathBuf, file: &'static str },
-    #[error("cannot resume: '{path}' {problem}; the checkpoints are intact: restore the file, or move it away to resume with a new log from the checkpoint on")]
+    #[error(
+        "cannot resume: '{path}' {problem}; the checkpoints are intact: restore the file, or move it away to resume with a new log from the checkpoint on"
+    )]
     DamagedLog { path: PathBuf, problem: String },
-    #[error("another flapper train is using '{0}' (its lock file .lock is held); wait for it to end or use another --out")]
+    #[error(
+        "another flapper train is using '{0}' (its lock file .lock is held); wait for it to end or use another --out"
+    )]
     Busy(PathBuf),
     #[error("'{0}' has no checkpoint to resume from (checkpoints/iter_*.safetensors)")]
     NothingToResume(PathBuf),
     #[error("cannot write '{path}': {message}")]
     Output { path: PathBuf, message: String },
-    #[error("'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run with --init-from on it instead")]
+    #[error(
+        "'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run with --init-from on it instead"
+    )]
     NoEnvironmentState(PathBuf),
-    #[error("the run reached {iterations} iterations already (checkpoint at iteration {done}); raise the iteration count to train further")]
+    #[error(
+        "the run reached {iterations} iterations already (checkpoint at iteration {done}); raise the iteration count to train further"
+    )]
     AlreadyDone { iterations: usize, done: usize },
 }
 
@@ -126,7 +136,8 @@ fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
 
 /// The files a run writes in its folder besides the checkpoints: a new run refuses a
 /// folder that holds any of them, so it never overwrites a user's own file.
-pub const RUN_FILES: [&str; 5] = ["config.toml", "policy.safetensors", "policy.safetensors.json", "learning_curves.svg", "training.csv"];
+pub const RUN_FILES: [&str; 5] =
+    ["config.toml", "policy.safetensors", "policy.safetensors.json", "learning_curves.svg", "training.csv"];
 
 pub fn checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints")
@@ -160,7 +171,10 @@ impl<E: VecEnv> Trainer<E> {
         let threads = runner.thread_count();
         let (o, a) = (env.observation_size(), env.action_size());
         let mut rng = ChaCha8Rng::seed_from_u64(runner.seed);
-        let output = |path: &Path, e: &dyn std::fmt::Display| TrainError::Output { path: path.to_owned(), message: e.to_string() };
+        let output = |path: &Path, e: &dyn std::fmt::Display| TrainError::Output {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
         let (mut iteration, mut env_steps, mut wall_time_before_s) = (0, 0, 0.0);
         let run_lock: std::fs::File;
         let ppo = match &start {
@@ -205,7 +219,9 @@ impl<E: VecEnv> Trainer<E> {
                         }
                         ppo
                     }
-                    None => Ppo::new(ActorCritic::new(o, a, &ppo_config, &mut rng), ppo_config, runner.envs, rng, threads),
+                    None => {
+                        Ppo::new(ActorCritic::new(o, a, &ppo_config, &mut rng), ppo_config, runner.envs, rng, threads)
+                    }
                 }
             }
             Start::Resume => {
@@ -218,7 +234,8 @@ impl<E: VecEnv> Trainer<E> {
                 if loaded.info.iteration >= runner.iterations {
                     return Err(TrainError::AlreadyDone { iterations: runner.iterations, done: loaded.info.iteration });
                 }
-                let environments = loaded.environments.as_deref().ok_or_else(|| TrainError::NoEnvironmentState(path.clone()))?;
+                let environments =
+                    loaded.environments.as_deref().ok_or_else(|| TrainError::NoEnvironmentState(path.clone()))?;
                 env.restore_state(environments).map_err(TrainError::Env)?;
                 iteration = loaded.info.iteration;
                 env_steps = loaded.info.env_steps;
@@ -356,7 +373,14 @@ impl<E: VecEnv> Trainer<E> {
             }
             if last {
                 let path = self.dir.join("policy.safetensors");
-                let info = checkpoint::describe(&self.ppo, CheckpointKind::Policy, self.iteration, self.env_steps, log.wall_time_s, &self.config_toml);
+                let info = checkpoint::describe(
+                    &self.ppo,
+                    CheckpointKind::Policy,
+                    self.iteration,
+                    self.env_steps,
+                    log.wall_time_s,
+                    &self.config_toml,
+                );
                 checkpoint::save(&path, &info, &self.ppo.policy, None, None)?;
                 break;
             }
@@ -366,7 +390,14 @@ impl<E: VecEnv> Trainer<E> {
 
     fn save_checkpoint(&self, wall_time_s: f64) -> Result<(), TrainError> {
         let path = checkpoint_dir(&self.dir).join(format!("iter_{:06}.safetensors", self.iteration));
-        let info = checkpoint::describe(&self.ppo, CheckpointKind::Checkpoint, self.iteration, self.env_steps, wall_time_s, &self.config_toml);
+        let info = checkpoint::describe(
+            &self.ppo,
+            CheckpointKind::Checkpoint,
+            self.iteration,
+            self.env_steps,
+            wall_time_s,
+            &self.config_toml,
+        );
         let environments = self.env.save_state().map_err(TrainError::Env)?;
         checkpoint::save(&path, &info, &self.ppo.policy, Some(&self.ppo.optimizer), Some(&environments))?;
         Ok(())
@@ -374,7 +405,12 @@ impl<E: VecEnv> Trainer<E> {
 
     /// Runs the checkpoint hooks (after a checkpoint is saved); a hook's error names the run folder.
     fn run_checkpoint_hooks(&mut self) -> Result<(), TrainError> {
-        let event = CheckpointEvent { dir: &self.dir, iteration: self.iteration, history: &self.history, end_reasons: &self.end_reasons };
+        let event = CheckpointEvent {
+            dir: &self.dir,
+            iteration: self.iteration,
+            history: &self.history,
+            end_reasons: &self.end_reasons,
+        };
         for hook in &mut self.checkpoint_hooks {
             hook(&event).map_err(|message| TrainError::Output { path: self.dir.clone(), message })?;
         }

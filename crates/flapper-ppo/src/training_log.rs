@@ -12,18 +12,26 @@ use crate::runner::{IterationLog, TrainError};
 /// The CSV header: fixed columns, one `end_<reason>` per episode end, the environment's diagnostics,
 /// the update's statistics and the timings.
 pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String]) -> Vec<String> {
-    let mut h: Vec<String> = [
-        "iteration", "env_steps", "wall_time_s", "steps_per_s", "episodes", "mean_return", "mean_length",
-    ]
-    .map(String::from)
-    .to_vec();
+    let mut h: Vec<String> =
+        ["iteration", "env_steps", "wall_time_s", "steps_per_s", "episodes", "mean_return", "mean_length"]
+            .map(String::from)
+            .to_vec();
     h.extend(end_reasons.iter().map(|r| format!("end_{r}")));
     h.push("mean_reward".into());
     h.extend(diagnostic_names.iter().cloned());
     h.extend(
         [
-            "surrogate_loss", "value_loss", "entropy", "kl", "clip_fraction", "grad_norm", "learning_rate", "action_std",
-            "env_time_s", "inference_time_s", "update_time_s",
+            "surrogate_loss",
+            "value_loss",
+            "entropy",
+            "kl",
+            "clip_fraction",
+            "grad_norm",
+            "learning_rate",
+            "action_std",
+            "env_time_s",
+            "inference_time_s",
+            "update_time_s",
         ]
         .map(String::from),
     );
@@ -72,7 +80,16 @@ impl<'a> TrainingRow<'a> {
             end_counts: &log.end_counts,
             mean_reward: log.mean_reward,
             diagnostics: &log.diagnostics,
-            update: [u.surrogate_loss, u.value_loss, u.entropy, u.kl, u.clip_fraction, u.grad_norm, u.learning_rate, u.action_std],
+            update: [
+                u.surrogate_loss,
+                u.value_loss,
+                u.entropy,
+                u.kl,
+                u.clip_fraction,
+                u.grad_norm,
+                u.learning_rate,
+                u.action_std,
+            ],
             times_s: [log.env_time_s, log.inference_time_s, log.update_time_s],
         }
     }
@@ -107,7 +124,11 @@ pub(crate) fn prepare(path: &Path, header: &[String], resume: bool, iteration: u
             // Rows past the checkpoint are dropped whole, a row cut short by a crash among them.
             if row_iteration <= iteration {
                 if record.len() != header.len() {
-                    return Err(damaged(format!("line {line} has {} fields, the header {}", record.len(), header.len())));
+                    return Err(damaged(format!(
+                        "line {line} has {} fields, the header {}",
+                        record.len(),
+                        header.len()
+                    )));
                 }
                 kept.write_record(&record).map_err(output)?;
             }
@@ -136,7 +157,9 @@ pub fn read_history(path: &Path) -> Result<Vec<IterationLog>, String> {
     let mut rows = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| e.to_string())?;
-        let get = |name: &str| column(name).and_then(|i| record.get(i)).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
+        let get = |name: &str| {
+            column(name).and_then(|i| record.get(i)).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN)
+        };
         rows.push(IterationLog {
             iteration: get("iteration") as usize,
             env_steps: get("env_steps") as u64,

@@ -57,10 +57,15 @@ fn reference_of(reference: &Bound<'_, PyAny>, dt_s: f64, lookahead_steps: usize)
         return resolve(&name, dt_s, lookahead_steps).map_err(value_error);
     }
     let points: PyReadonlyArray2<f64> = reference.extract().map_err(|_| {
-        PyTypeError::new_err("a reference is a name, a CSV path, or a float64 array of shape (rows, 3): x, y, z in metres")
+        PyTypeError::new_err(
+            "a reference is a name, a CSV path, or a float64 array of shape (rows, 3): x, y, z in metres",
+        )
     })?;
     if points.shape()[1] != 3 {
-        return Err(PyValueError::new_err(format!("a reference array has 3 columns (x, y, z), got shape {:?}", points.shape())));
+        return Err(PyValueError::new_err(format!(
+            "a reference array has 3 columns (x, y, z), got shape {:?}",
+            points.shape()
+        )));
     }
     let rows: Vec<[f64; 3]> = points.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
     reference_from_points(&rows, "array", dt_s, lookahead_steps).map_err(value_error)
@@ -102,7 +107,9 @@ impl VecEnvCore {
         let dt_s = task.control_period_s(robot.timestep_s());
         let lookahead = task.observation.lookahead_steps;
         let source = match reference {
-            None if evaluation => return Err(PyValueError::new_err("evaluation=True flies a fixed reference: give reference")),
+            None if evaluation => {
+                return Err(PyValueError::new_err("evaluation=True flies a fixed reference: give reference"));
+            }
             None => ReferenceSource::Procedural,
             Some(reference) => {
                 let reference = Arc::new(reference_of(reference, dt_s, lookahead)?);
@@ -113,7 +120,9 @@ impl VecEnvCore {
             }
         };
         let task_for_envs = task.clone();
-        let envs = py.detach(move || FlightVecEnv::new(&robot, task_for_envs, source, num_envs, seed, threads)).map_err(value_error)?;
+        let envs = py
+            .detach(move || FlightVecEnv::new(&robot, task_for_envs, source, num_envs, seed, threads))
+            .map_err(value_error)?;
         Ok(Self { envs, task, dt_s })
     }
 
@@ -170,7 +179,11 @@ impl VecEnvCore {
     /// Steps every environment with its row of `actions` (float32, [N, 5], finite). Returns
     /// (observations, rewards, terminated, truncated, info arrays); see `vector_env.py`.
     #[allow(clippy::type_complexity)]
-    fn step<'py>(&mut self, py: Python<'py>, actions: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let (n, shape) = (self.envs.len(), actions.shape().to_vec());
         if shape != [n, ACTION_SIZE] {
             return Err(PyValueError::new_err(format!("actions must have shape ({n}, {ACTION_SIZE}), got {shape:?}")));
@@ -196,7 +209,9 @@ impl VecEnvCore {
             episode_length[info.env_index] = info.length;
         }
         let terms = self.envs.reward_terms();
-        let term = |f: fn(&flapper_task::reward::RewardTerms) -> f64| terms.iter().map(f).collect::<Vec<f64>>().into_pyarray(py);
+        let term = |f: fn(&flapper_task::reward::RewardTerms) -> f64| {
+            terms.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
+        };
         let out = pyo3::types::PyDict::new(py);
         out.set_item("observations", rows(py, self.envs.observations(), size)?)?;
         out.set_item("final_observations", rows(py, self.envs.final_observations(), size)?)?;
@@ -218,11 +233,23 @@ impl VecEnvCore {
     /// float64 array, resolved once) from now on, starting a new episode on it at once. Returns the
     /// observations [N, obs].
     #[pyo3(signature = (reference, index=None))]
-    fn set_reference<'py>(&mut self, py: Python<'py>, reference: &Bound<'py, PyAny>, index: Option<usize>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    fn set_reference<'py>(
+        &mut self,
+        py: Python<'py>,
+        reference: &Bound<'py, PyAny>,
+        index: Option<usize>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         if let Some(index) = index.filter(|&i| i >= self.envs.len()) {
-            return Err(PyValueError::new_err(format!("environment {index} does not exist ({} environments)", self.envs.len())));
+            return Err(PyValueError::new_err(format!(
+                "environment {index} does not exist ({} environments)",
+                self.envs.len()
+            )));
         }
-        let source = ReferenceSource::Fixed(Arc::new(reference_of(reference, self.dt_s, self.task.observation.lookahead_steps)?));
+        let source = ReferenceSource::Fixed(Arc::new(reference_of(
+            reference,
+            self.dt_s,
+            self.task.observation.lookahead_steps,
+        )?));
         let indices = index.map_or(0..self.envs.len(), |i| i..i + 1);
         for i in indices {
             self.envs.set_reference_source(i, source.clone()).map_err(value_error)?;
@@ -232,7 +259,11 @@ impl VecEnvCore {
 
     /// The reference environment `index` flies now, as [rows, 3] positions (m) at the control rate.
     fn reference_points<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let env = self.envs.envs().get(index).ok_or_else(|| PyValueError::new_err(format!("environment {index} does not exist")))?;
+        let env = self
+            .envs
+            .envs()
+            .get(index)
+            .ok_or_else(|| PyValueError::new_err(format!("environment {index} does not exist")))?;
         let flat: Vec<f64> = env.reference().points().iter().flat_map(|p| [p.x, p.y, p.z]).collect();
         Ok(Array2::from_shape_vec((flat.len() / 3, 3), flat).expect("three columns").into_pyarray(py))
     }
@@ -277,7 +308,11 @@ impl Policy {
     /// Mean actions [N, 5] (float32) for raw observations [N, obs] (float32, finite). The matrix
     /// products may round differently in the last bits for another N; `flapper eval` acts on one
     /// row at a time, so do the same to reproduce it bit for bit.
-    fn act<'py>(&self, py: Python<'py>, observations: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    fn act<'py>(
+        &self,
+        py: Python<'py>,
+        observations: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let shape = observations.shape().to_vec();
         if shape[1] != self.policy.observation_size() {
             return Err(PyValueError::new_err(format!(
@@ -316,7 +351,14 @@ fn named_reference_start_m() -> (f64, f64, f64) {
 /// The baseline of `benchmarks/steps_per_second.py`.
 #[pyfunction]
 #[pyo3(signature = (actions, steps, stage=1, seed=0, threads=0))]
-fn rust_steps_per_second(py: Python<'_>, actions: PyReadonlyArray2<'_, f32>, steps: usize, stage: i64, seed: u64, threads: usize) -> PyResult<f64> {
+fn rust_steps_per_second(
+    py: Python<'_>,
+    actions: PyReadonlyArray2<'_, f32>,
+    steps: usize,
+    stage: i64,
+    seed: u64,
+    threads: usize,
+) -> PyResult<f64> {
     let (count, flat): (usize, Vec<f32>) = (actions.shape()[0], actions.as_array().iter().copied().collect());
     if actions.shape()[1] != ACTION_SIZE || count == 0 || flat.iter().any(|a| !a.is_finite()) {
         return Err(PyValueError::new_err("actions must be finite, of shape (num_envs, 5)"));

@@ -31,7 +31,13 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// A fixed camera at the given azimuth and elevation that sees every point, with a margin, in a
 /// picture of `aspect` = width / height and vertical field of view `fovy_deg`.
-pub fn framing_camera(points_m: &[[f64; 3]], azimuth_deg: f64, elevation_deg: f64, aspect: f64, fovy_deg: f64) -> Option<CameraView> {
+pub fn framing_camera(
+    points_m: &[[f64; 3]],
+    azimuth_deg: f64,
+    elevation_deg: f64,
+    aspect: f64,
+    fovy_deg: f64,
+) -> Option<CameraView> {
     if points_m.is_empty() {
         return None;
     }
@@ -73,7 +79,9 @@ pub fn chase_cameras(positions_m: &[[f64; 3]], fps: f64, distance_m: f64, elevat
         let raw = if dx.hypot(dy) > 0.2 { dy.atan2(dx) } else { previous.unwrap_or(0.0) };
         // Unwrap, so smoothing never swings the long way round.
         let heading = match previous {
-            Some(p) => p + (raw - p + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI,
+            Some(p) => {
+                p + (raw - p + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
+            }
             None => raw,
         };
         headings.push(heading);
@@ -98,7 +106,8 @@ mod tests {
 
     #[test]
     fn a_framing_camera_sees_every_point() {
-        let points: Vec<[f64; 3]> = (0..50).map(|k| [k as f64 * 0.4, (k as f64 * 0.3).sin() * 3.0, 10.0 + (k as f64 * 0.2).cos()]).collect();
+        let points: Vec<[f64; 3]> =
+            (0..50).map(|k| [k as f64 * 0.4, (k as f64 * 0.3).sin() * 3.0, 10.0 + (k as f64 * 0.2).cos()]).collect();
         for (azimuth, elevation) in [(90.0, 0.0), (0.0, -89.0), (45.0, -30.0)] {
             let view = framing_camera(&points, azimuth, elevation, 16.0 / 9.0, 45.0).unwrap();
             let (forward, right, up) = view.axes();

@@ -4,10 +4,10 @@ use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, RobotModel};
 use mujoco_rs::prelude::*;
 use mujoco_rs::renderer::MjRenderer;
 
+use crate::RenderError;
 use crate::camera::CameraView;
 use crate::image::Frame;
 use crate::scenery::{MAX_HEIGHT_PX, MAX_WIDTH_PX, render_model_mjcf};
-use crate::RenderError;
 
 /// Where the robot is and how its joints stand at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,7 +21,11 @@ pub struct Pose {
 
 impl Pose {
     /// From roll, pitch and yaw (rad, the convention of `flapper_sim::quat_from_euler`).
-    pub fn from_euler(position_m: [f64; 3], euler_rad: [f64; 3], joint_positions_rad: [f64; N_ACTUATED_JOINTS]) -> Self {
+    pub fn from_euler(
+        position_m: [f64; 3],
+        euler_rad: [f64; 3],
+        joint_positions_rad: [f64; N_ACTUATED_JOINTS],
+    ) -> Self {
         let q = flapper_sim::quat_from_euler(euler_rad[0], euler_rad[1], euler_rad[2]);
         Self { position_m, orientation_wxyz: flapper_sim::quat_to_wxyz(q), joint_positions_rad }
     }
@@ -47,9 +51,18 @@ const JOINT_LABEL_OFFSETS_M: [[f64; 3]; N_ACTUATED_JOINTS] =
     [[0.0, 0.12, 0.2], [0.15, 0.3, 0.08], [0.0, -0.12, 0.2], [0.15, -0.3, 0.08], [-0.15, 0.0, 0.18]];
 
 /// Adds a connector geom (arrow or line) from `from` to `to`, with an optional label.
-fn add_connector(scene: &mut MjvScene, kind: MjtGeom, width: f64, from: [f64; 3], to: [f64; 3], rgba: [f32; 4], label: &str) -> Result<(), RenderError> {
+fn add_connector(
+    scene: &mut MjvScene,
+    kind: MjtGeom,
+    width: f64,
+    from: [f64; 3],
+    to: [f64; 3],
+    rgba: [f32; 4],
+    label: &str,
+) -> Result<(), RenderError> {
     // SAFETY: no material, texture or object index is set (all stay -1).
-    let geom = unsafe { scene.try_create_geom(kind, None, None, None, Some(rgba)) }.map_err(|e| RenderError::Render(format!("{e:?}")))?;
+    let geom = unsafe { scene.try_create_geom(kind, None, None, None, Some(rgba)) }
+        .map_err(|e| RenderError::Render(format!("{e:?}")))?;
     geom.connect(width, from, to);
     geom.set_label(label).map_err(|e| RenderError::Render(format!("{e:?}")))
 }
@@ -75,11 +88,17 @@ impl FlightRenderer {
     /// A renderer of `robot` (with the scenery added) drawing `width` x `height` pixels.
     pub fn new(robot: &RobotModel, width: usize, height: usize) -> Result<Self, RenderError> {
         if width == 0 || height == 0 || width > MAX_WIDTH_PX || height > MAX_HEIGHT_PX {
-            return Err(RenderError::Render(format!("a frame must be 1x1 to {MAX_WIDTH_PX}x{MAX_HEIGHT_PX} pixels, got {width}x{height}")));
+            return Err(RenderError::Render(format!(
+                "a frame must be 1x1 to {MAX_WIDTH_PX}x{MAX_HEIGHT_PX} pixels, got {width}x{height}"
+            )));
         }
         let text = render_model_mjcf(robot.mjcf()).ok_or_else(|| RenderError::Model("no <mujoco> element".into()))?;
         let model = MjModel::from_xml_string(&text).map_err(|e| RenderError::Model(e.to_string()))?;
-        let id_of = |name: &str| model.name_to_id(MjtObjBase::mjOBJ_JOINT, name).ok_or_else(|| RenderError::Model(format!("no joint '{name}'")));
+        let id_of = |name: &str| {
+            model
+                .name_to_id(MjtObjBase::mjOBJ_JOINT, name)
+                .ok_or_else(|| RenderError::Model(format!("no joint '{name}'")))
+        };
         let base_qpos = model.jnt_qposadr()[id_of(flapper_sim::BASE_JOINT)?] as usize;
         let mut joint_ids = [0; N_ACTUATED_JOINTS];
         for joint in ActuatedJoint::ALL {
@@ -96,7 +115,17 @@ impl FlightRenderer {
             .build(&model)
             .map_err(|e| RenderError::NoOpenGl(format!("{e:?}")))?;
         let data = MjData::try_new(Box::new(model)).map_err(|e| RenderError::Model(e.to_string()))?;
-        Ok(Self { data, renderer, base_qpos, joint_ids, joint_qpos, width, height, markers: Vec::new(), annotated: false })
+        Ok(Self {
+            data,
+            renderer,
+            base_qpos,
+            joint_ids,
+            joint_qpos,
+            width,
+            height,
+            markers: Vec::new(),
+            annotated: false,
+        })
     }
 
     pub fn size(&self) -> (usize, usize) {
@@ -143,8 +172,16 @@ impl FlightRenderer {
         scene.clear_geom();
         for m in &self.markers {
             // SAFETY: no material, texture or object index is set (all stay -1).
-            unsafe { scene.try_create_geom(MjtGeom::mjGEOM_SPHERE, Some([m.radius_m; 3]), Some(m.position_m), None, Some(m.rgba)) }
-                .map_err(|e| RenderError::Render(format!("{e:?}")))?;
+            unsafe {
+                scene.try_create_geom(
+                    MjtGeom::mjGEOM_SPHERE,
+                    Some([m.radius_m; 3]),
+                    Some(m.position_m),
+                    None,
+                    Some(m.rgba),
+                )
+            }
+            .map_err(|e| RenderError::Render(format!("{e:?}")))?;
         }
         if self.annotated {
             let rotation = flapper_sim::quat_from_wxyz(pose.orientation_wxyz);
@@ -167,7 +204,15 @@ impl FlightRenderer {
                 let d = world(JOINT_LABEL_OFFSETS_M[joint.index()]);
                 let at = [a[0] + d.x, a[1] + d.y, a[2] + d.z];
                 add_connector(scene, MjtGeom::mjGEOM_LINE, 1.5, a, at, [0.15, 0.15, 0.15, 1.0], "")?;
-                add_connector(scene, MjtGeom::mjGEOM_LINE, 1.0, at, at, [0.15, 0.15, 0.15, 1.0], &format!("q{} {}", joint.index() + 1, joint.name()))?;
+                add_connector(
+                    scene,
+                    MjtGeom::mjGEOM_LINE,
+                    1.0,
+                    at,
+                    at,
+                    [0.15, 0.15, 0.15, 1.0],
+                    &format!("q{} {}", joint.index() + 1, joint.name()),
+                )?;
             }
         }
         self.renderer.sync_data(&mut self.data).map_err(|e| RenderError::Render(format!("{e:?}")))?;

@@ -10,7 +10,12 @@ use crate::image::Frame;
 
 /// Whether `ffmpeg` runs from PATH.
 pub fn ffmpeg_available() -> bool {
-    Command::new("ffmpeg").arg("-version").stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success())
+    Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 /// An MP4 being written.
@@ -34,8 +39,31 @@ impl VideoEncoder {
         let name = path.file_name().ok_or_else(|| failed("not a file name".into()))?.to_string_lossy();
         let temporary = path.with_file_name(format!(".tmp-{name}"));
         let child = Command::new("ffmpeg")
-            .args(["-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", &format!("{width}x{height}")])
-            .args(["-r", &fps.to_string(), "-i", "-", "-c:v", "libx264", "-preset", "medium", "-crf", "23", "-pix_fmt", "yuv420p"])
+            .args([
+                "-y",
+                "-loglevel",
+                "error",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-s",
+                &format!("{width}x{height}"),
+            ])
+            .args([
+                "-r",
+                &fps.to_string(),
+                "-i",
+                "-",
+                "-c:v",
+                "libx264",
+                "-preset",
+                "medium",
+                "-crf",
+                "23",
+                "-pix_fmt",
+                "yuv420p",
+            ])
             .args(["-movflags", "+faststart", "-f", "mp4"])
             .arg(&temporary)
             .stdin(Stdio::piped())
@@ -48,7 +76,10 @@ impl VideoEncoder {
 
     pub fn push(&mut self, frame: &Frame) -> Result<(), RenderError> {
         if (frame.width, frame.height) != self.size {
-            return Err(self.fail(format!("frame of {}x{} in a {}x{} video", frame.width, frame.height, self.size.0, self.size.1)));
+            return Err(self.fail(format!(
+                "frame of {}x{} in a {}x{} video",
+                frame.width, frame.height, self.size.0, self.size.1
+            )));
         }
         let stdin = self.child.stdin.as_mut().expect("stdin is piped until finish");
         if let Err(e) = stdin.write_all(&frame.rgb) {

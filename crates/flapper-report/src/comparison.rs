@@ -44,7 +44,13 @@ impl Source {
         Some(match self.format {
             Format::Fixed(d) => format!("{:.*}", d, value.as_f64()? * self.scale),
             Format::Scientific(d) => format!("{:.*e}", d, value.as_f64()? * self.scale),
-            Format::YesNo => if value.as_bool()? { "yes".into() } else { "no".into() },
+            Format::YesNo => {
+                if value.as_bool()? {
+                    "yes".into()
+                } else {
+                    "no".into()
+                }
+            }
             Format::Text => value.as_str()?.to_owned(),
         })
     }
@@ -115,36 +121,77 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         &|v| {
             let flap: f64 = v[0].parse().unwrap_or(f64::NAN);
             let off = 100.0 * (flap / 5.3 - 1.0);
-            (format!("{} / {} / {} Hz (flap / wing pitch / tail)", v[0], v[1], v[2]), if off.abs() <= 10.0 { format!("agrees within 10% (flap {off:+.0}%)") } else { format!("differs: flap {off:+.0}%") })
+            (
+                format!("{} / {} / {} Hz (flap / wing pitch / tail)", v[0], v[1], v[2]),
+                if off.abs() <= 10.0 {
+                    format!("agrees within 10% (flap {off:+.0}%)")
+                } else {
+                    format!("differs: flap {off:+.0}%")
+                },
+            )
         },
     );
     row(
         "energy in the fundamental frequency",
         "36.8-38.7% (flap, wing pitch, tail)",
-        (0..3).map(|k| Source::new(cruise, &format!("/summary/energy_fraction/{k}"), 100.0, Format::Fixed(1))).collect(),
+        (0..3)
+            .map(|k| Source::new(cruise, &format!("/summary/energy_fraction/{k}"), 100.0, Format::Fixed(1)))
+            .collect(),
         &|v| {
             let within = v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| (30.0..=45.0).contains(&p)));
-            (format!("{}% / {}% / {}%", v[0], v[1], v[2]), if within { "agrees (30-45%)".into() } else { "differs".into() })
+            (
+                format!("{}% / {}% / {}%", v[0], v[1], v[2]),
+                if within { "agrees (30-45%)".into() } else { "differs".into() },
+            )
         },
     );
     let sysid = "sysid/sysid.json";
     row(
         "identification MSE of the closed loop",
         "5.6e-5 m^2",
-        ["x", "y", "z"].iter().map(|a| Source::new(sysid, &format!("/{a}/mse_validation"), 1.0, Format::Scientific(1))).collect(),
+        ["x", "y", "z"]
+            .iter()
+            .map(|a| Source::new(sysid, &format!("/{a}/mse_validation"), 1.0, Format::Scientific(1)))
+            .collect(),
         &|v| {
             let worst = v.iter().filter_map(|x| x.parse::<f64>().ok()).fold(0.0, f64::max);
-            (format!("x {} / y {} / z {} m^2", v[0], v[1], v[2]), if worst <= 1e-4 { "agrees".into() } else { format!("higher: up to {:.0}x the paper's", worst / 5.6e-5) })
+            (
+                format!("x {} / y {} / z {} m^2", v[0], v[1], v[2]),
+                if worst <= 1e-4 {
+                    "agrees".into()
+                } else {
+                    format!("higher: up to {:.0}x the paper's", worst / 5.6e-5)
+                },
+            )
         },
     );
-    for (claim, key) in [("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable"), ("zeros in the left half plane (minimum phase)", "minimum_phase")] {
-        row(claim, "yes, every axis", ["x", "y", "z"].iter().map(|a| Source::new(sysid, &format!("/{a}/{key}"), 1.0, Format::YesNo)).collect(), &|v| {
-            (format!("x {}, y {}, z {}", v[0], v[1], v[2]), if v.iter().all(|x| x == "yes") { "agrees".into() } else { "differs".into() })
-        });
+    for (claim, key) in [
+        ("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable"),
+        ("zeros in the left half plane (minimum phase)", "minimum_phase"),
+    ] {
+        row(
+            claim,
+            "yes, every axis",
+            ["x", "y", "z"].iter().map(|a| Source::new(sysid, &format!("/{a}/{key}"), 1.0, Format::YesNo)).collect(),
+            &|v| {
+                (
+                    format!("x {}, y {}, z {}", v[0], v[1], v[2]),
+                    if v.iter().all(|x| x == "yes") { "agrees".into() } else { "differs".into() },
+                )
+            },
+        );
     }
-    for (name, claim) in [("sharp-turn", "180 deg turn in 1.2 s"), ("loop", "loop in 3 s"), ("roll-off-the-bottom", "roll-off-the-bottom in 1.8 s"), ("aerobatic", "aerobatic trajectory")] {
+    for (name, claim) in [
+        ("sharp-turn", "180 deg turn in 1.2 s"),
+        ("loop", "loop in 3 s"),
+        ("roll-off-the-bottom", "roll-off-the-bottom in 1.8 s"),
+        ("aerobatic", "aerobatic trajectory"),
+    ] {
         let file = format!("tracking/{name}/summary.json");
-        let mut sources = vec![Source::new(&file, "/summary/completed", 1.0, Format::Fixed(0)), Source::new(&file, "/summary/episodes", 1.0, Format::Fixed(0))];
+        let mut sources = vec![
+            Source::new(&file, "/summary/completed", 1.0, Format::Fixed(0)),
+            Source::new(&file, "/summary/episodes", 1.0, Format::Fixed(0)),
+        ];
         let manoeuvre = name != "aerobatic";
         if manoeuvre {
             sources.push(Source::new(&file, "/summary/manoeuvre/mean_max_error_m", 1.0, Format::Fixed(2)));
@@ -153,62 +200,121 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         }
         row(claim, "flown, tracking the reference", sources, &|v| {
             let (done, of): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(1.0));
-            let detail = if manoeuvre { format!("largest error in it {} m (mean)", v[2]) } else { format!("RMS error {} m", v[2]) };
-            (format!("completed {}/{}; {detail}", v[0], v[1]), if done >= 0.9 * of { "agrees".into() } else { format!("partly: {:.0}% completed", 100.0 * done / of) })
+            let detail = if manoeuvre {
+                format!("largest error in it {} m (mean)", v[2])
+            } else {
+                format!("RMS error {} m", v[2])
+            };
+            (
+                format!("completed {}/{}; {detail}", v[0], v[1]),
+                if done >= 0.9 * of { "agrees".into() } else { format!("partly: {:.0}% completed", 100.0 * done / of) },
+            )
         });
     }
     let training = "training/training.json";
     row(
         "training cost",
         "30 M steps in about 5 h on 8 cores",
-        vec![Source::new(training, "/total_env_steps", 1e-6, Format::Fixed(1)), Source::new(training, "/total_wall_time_s", 1.0 / 3600.0, Format::Fixed(2))],
+        vec![
+            Source::new(training, "/total_env_steps", 1e-6, Format::Fixed(1)),
+            Source::new(training, "/total_wall_time_s", 1.0 / 3600.0, Format::Fixed(2)),
+        ],
         &|v| {
             let (steps, hours): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(0.0));
             let ratio = if hours > 0.0 { (steps / hours) / (30.0 / 5.0) } else { f64::NAN };
-            (format!("{} M steps in {} h (all shipped stages)", v[0], v[1]), format!("{ratio:.1}x the paper's steps per hour"))
+            (
+                format!("{} M steps in {} h (all shipped stages)", v[0], v[1]),
+                format!("{ratio:.1}x the paper's steps per hour"),
+            )
         },
     );
     let robustness = |r: &str| format!("robustness/{r}/robustness.json");
     let widest_all = |r: &str| -> Option<String> {
         let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join(robustness(r))).ok()?).ok()?;
         let fluid = json.get("fluid")?.as_array()?;
-        let (k, _) = fluid.iter().enumerate().filter(|(_, f)| f["coefficient"] == "all").max_by(|a, b| a.1["range"].as_f64().partial_cmp(&b.1["range"].as_f64()).expect("finite ranges"))?;
+        let (k, _) = fluid
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f["coefficient"] == "all")
+            .max_by(|a, b| a.1["range"].as_f64().partial_cmp(&b.1["range"].as_f64()).expect("finite ranges"))?;
         Some(format!("/fluid/{k}/success_rate"))
     };
     let pointers: Vec<Source> = ["longitudinal", "lateral"]
         .iter()
         .filter_map(|r| widest_all(r).map(|p| Source::new(&robustness(r), &p, 100.0, Format::Fixed(0))))
         .collect();
-    row("success with all five fluid coefficients randomized x[0.5, 1.5]", "relatively successful (Fig. 9)", pointers, &|v| {
-        let text = v.iter().zip(["longitudinal", "lateral"]).map(|(x, r)| format!("{r} {x}%")).collect::<Vec<_>>().join(", ");
-        let ok = v.len() == 2 && v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| p >= 80.0));
-        (text, if ok { "agrees (>= 80%)".into() } else { "partly: below 80% somewhere".into() })
-    });
+    row(
+        "success with all five fluid coefficients randomized x[0.5, 1.5]",
+        "relatively successful (Fig. 9)",
+        pointers,
+        &|v| {
+            let text = v
+                .iter()
+                .zip(["longitudinal", "lateral"])
+                .map(|(x, r)| format!("{r} {x}%"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let ok = v.len() == 2 && v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| p >= 80.0));
+            (text, if ok { "agrees (>= 80%)".into() } else { "partly: below 80% somewhere".into() })
+        },
+    );
     row(
         "most sensitive fluid coefficient",
         "Kutta lift C_K",
-        ["longitudinal", "lateral"].iter().map(|r| Source::new(&robustness(r), "/most_sensitive_coefficient", 1.0, Format::Text)).collect(),
-        &|v| (format!("longitudinal {}, lateral {}", v[0], v[1]), if v.iter().all(|x| x == "kutta") { "agrees".into() } else if v.iter().any(|x| x == "kutta") { "partly".into() } else { "differs".into() }),
+        ["longitudinal", "lateral"]
+            .iter()
+            .map(|r| Source::new(&robustness(r), "/most_sensitive_coefficient", 1.0, Format::Text))
+            .collect(),
+        &|v| {
+            (
+                format!("longitudinal {}, lateral {}", v[0], v[1]),
+                if v.iter().all(|x| x == "kutta") {
+                    "agrees".into()
+                } else if v.iter().any(|x| x == "kutta") {
+                    "partly".into()
+                } else {
+                    "differs".into()
+                },
+            )
+        },
     );
     row(
         "everything in Table III randomized at once",
         "tracks (Fig. 8)",
-        ["longitudinal", "lateral"].iter().map(|r| Source::new(&robustness(r), "/table_iii/success_rate", 100.0, Format::Fixed(0))).collect(),
+        ["longitudinal", "lateral"]
+            .iter()
+            .map(|r| Source::new(&robustness(r), "/table_iii/success_rate", 100.0, Format::Fixed(0)))
+            .collect(),
         &|v| {
             let ok = v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| p >= 90.0));
-            (format!("success longitudinal {}%, lateral {}%", v[0], v[1]), if ok { "agrees (>= 90%)".into() } else { "partly: below 90%".into() })
+            (
+                format!("success longitudinal {}%, lateral {}%", v[0], v[1]),
+                if ok { "agrees (>= 90%)".into() } else { "partly: below 90%".into() },
+            )
         },
     );
     // The phase portraits' claims, one row each, as `flapper phase` checks them.
-    let claims = std::fs::read_to_string(out.join("phase/phase.json")).ok().and_then(|t| serde_json::from_str::<Value>(&t).ok()).and_then(|j| j["claims"].as_array().map(|a| a.len())).unwrap_or(0);
+    let claims = std::fs::read_to_string(out.join("phase/phase.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+        .and_then(|j| j["claims"].as_array().map(|a| a.len()))
+        .unwrap_or(0);
     for k in 0..claims {
         let claim = Source::new("phase/phase.json", &format!("/claims/{k}/claim"), 1.0, Format::Text);
         let paper = claim.read(out).unwrap_or_default();
         row(
             &format!("phase portrait (Fig. 6-7): {paper}"),
             "as stated",
-            vec![Source::new("phase/phase.json", &format!("/claims/{k}/ours"), 1.0, Format::Text), Source::new("phase/phase.json", &format!("/claims/{k}/confirmed"), 1.0, Format::YesNo)],
-            &|v| (format!("{} (confirmed: {})", v[0], v[1]), if v[1] == "yes" { "agrees".into() } else { "differs".into() }),
+            vec![
+                Source::new("phase/phase.json", &format!("/claims/{k}/ours"), 1.0, Format::Text),
+                Source::new("phase/phase.json", &format!("/claims/{k}/confirmed"), 1.0, Format::YesNo),
+            ],
+            &|v| {
+                (
+                    format!("{} (confirmed: {})", v[0], v[1]),
+                    if v[1] == "yes" { "agrees".into() } else { "differs".into() },
+                )
+            },
         );
     }
     Ok(rows)
@@ -216,7 +322,8 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
 
 /// `paper_vs_flapper.csv`: claim, paper, flapper, verdict, sources (space-separated descriptions).
 pub fn write_csv(rows: &[Row], path: &Path) -> Result<(), ReportError> {
-    flapper_files::write_csv_records(path, rows).map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+    flapper_files::write_csv_records(path, rows)
+        .map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 #[cfg(test)]

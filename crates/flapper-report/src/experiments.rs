@@ -4,7 +4,9 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use flapper_analysis::robustness::{PAPER_RANGES, RobustnessSettings, Sweep, default_winds, robustness as run_sweeps, write_robustness};
+use flapper_analysis::robustness::{
+    PAPER_RANGES, RobustnessSettings, Sweep, default_winds, robustness as run_sweeps, write_robustness,
+};
 use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
 use flapper_eval::tracking_report::{TrackingSummary, write_tracking_plots};
 use flapper_ppo::ActorCritic;
@@ -39,7 +41,14 @@ fn resolve_reference(robot: &RobotModel, task: &TaskConfig, name: &str) -> Resul
 }
 
 /// `flapper eval` without the baseline: `summary.json` (the table's figures), plots of 3 episodes.
-pub fn tracking(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, settings: &ReportSettings, dir: &Path) -> Result<Tracked, ReportError> {
+pub fn tracking(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    task: &TaskConfig,
+    name: &str,
+    settings: &ReportSettings,
+    dir: &Path,
+) -> Result<Tracked, ReportError> {
     let (reference, period_s) = resolve_reference(robot, task, name)?;
     let results = evaluate_tracking(robot, pilot, task, reference.clone(), settings.episodes, settings.seed)
         .map_err(|e| ReportError::step(format!("tracking on {name}"), e))?;
@@ -54,7 +63,8 @@ pub fn tracking(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str
         "summary": summary,
     });
     write_file(&dir.join("summary.json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
-    write_tracking_plots(&results, &format!("policy on {name}"), dir, 3).map_err(|e| ReportError::step(format!("plots of {name}"), e))?;
+    write_tracking_plots(&results, &format!("policy on {name}"), dir, 3)
+        .map_err(|e| ReportError::step(format!("plots of {name}"), e))?;
     Ok(Tracked { name: name.to_owned(), reference, results, period_s })
 }
 
@@ -82,13 +92,22 @@ pub fn phase(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, di
 /// `flapper modes`.
 pub fn modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(), ReportError> {
     create(dir)?;
-    flapper_analysis::modes::flight_modes(robot, policy, task, dir).map_err(|e| ReportError::step("flight modes", e))?;
+    flapper_analysis::modes::flight_modes(robot, policy, task, dir)
+        .map_err(|e| ReportError::step("flight modes", e))?;
     Ok(())
 }
 
 /// `flapper robustness` on one reference: the fluid sweep at the paper's ranges, the winds, Table III
 /// at once and, with `envelope`, the level airspeed envelope.
-pub fn robustness(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &str, envelope: bool, settings: &ReportSettings, dir: &Path) -> Result<(), ReportError> {
+pub fn robustness(
+    robot: &RobotModel,
+    pilot: &Pilot,
+    task: &TaskConfig,
+    name: &str,
+    envelope: bool,
+    settings: &ReportSettings,
+    dir: &Path,
+) -> Result<(), ReportError> {
     let (reference, _) = resolve_reference(robot, task, name)?;
     let mut sweeps = vec![Sweep::Fluid, Sweep::Wind, Sweep::TableIii];
     if envelope {
@@ -102,7 +121,8 @@ pub fn robustness(robot: &RobotModel, pilot: &Pilot, task: &TaskConfig, name: &s
         winds: default_winds(),
     };
     let fail = |e: flapper_analysis::AnalysisError| ReportError::step(format!("robustness on {name}"), e);
-    let (report, wind_paths) = run_sweeps(robot, pilot, task, reference.clone(), &sweep_settings, &|_: &str| {}).map_err(fail)?;
+    let (report, wind_paths) =
+        run_sweeps(robot, pilot, task, reference.clone(), &sweep_settings, &|_: &str| {}).map_err(fail)?;
     create(dir)?;
     write_robustness(&report, &wind_paths, &reference, dir).map_err(fail)?;
     Ok(())

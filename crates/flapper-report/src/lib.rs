@@ -91,21 +91,32 @@ pub fn step_count(settings: &ReportSettings) -> usize {
 
 /// Runs everything and writes the report into `out` (which must exist). `progress` is called after
 /// each step with what was done.
-pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<ReportOutcome, ReportError> {
+pub fn generate(
+    robot: &RobotModel,
+    settings: &ReportSettings,
+    out: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<ReportOutcome, ReportError> {
     let began = std::time::Instant::now();
-    if settings.episodes == 0 || settings.episodes > 10_000 || settings.robustness_episodes == 0 || settings.robustness_episodes > 10_000 {
+    if settings.episodes == 0
+        || settings.episodes > 10_000
+        || settings.robustness_episodes == 0
+        || settings.robustness_episodes > 10_000
+    {
         return Err(ReportError::Settings(format!(
             "episodes must be 1 to 10000 (got {} for tracking and {} for robustness)",
             settings.episodes, settings.robustness_episodes
         )));
     }
-    let (policy, task) = flapper_eval::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
+    let (policy, task) =
+        flapper_eval::load_flight_policy(&settings.policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let policy = Arc::new(policy);
     // A report folder is regenerated whole: nothing of an earlier run is shown as this one's.
     for part in REPORT_PARTS {
         let dir = out.join(part);
         if dir.exists() {
-            std::fs::remove_dir_all(&dir).map_err(|e| ReportError::Write { path: dir.clone(), message: e.to_string() })?;
+            std::fs::remove_dir_all(&dir)
+                .map_err(|e| ReportError::Write { path: dir.clone(), message: e.to_string() })?;
         }
     }
     let pilot = Pilot::Policy(policy.clone());
@@ -130,7 +141,12 @@ pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progr
     pictures::aerobatic_manoeuvres(find("aerobatic"), &out.join("render"))?;
     if settings.pictures {
         let dir = out.join("render");
-        match pictures::snapshots(robot, &[find("loop"), find("sharp-turn"), find("roll-off-the-bottom")], settings.snapshot_size_px, &dir) {
+        match pictures::snapshots(
+            robot,
+            &[find("loop"), find("sharp-turn"), find("roll-off-the-bottom")],
+            settings.snapshot_size_px,
+            &dir,
+        ) {
             Ok(()) => {}
             Err(e) => notes.push(format!("snapshots not rendered: {e}")),
         }
@@ -156,30 +172,52 @@ pub fn generate(robot: &RobotModel, settings: &ReportSettings, out: &Path, progr
 /// Writes `bytes` to `path` complete or not at all.
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })?;
     }
-    flapper_plot::write_atomically(path, bytes).map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+    flapper_plot::write_atomically(path, bytes)
+        .map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 /// `flapper render`: one flight of `policy` on `reference` (a name or a CSV file) from the randomized
 /// start of `seed`, as a chase-camera video (`NAME.mp4`, `NAME_poster.png`) and snapshots overlaid
 /// along its manoeuvre, or along the whole flight for a reference without one (`NAME.png`).
 /// Returns the files written and, when the video could not be made (no ffmpeg), why.
-pub fn render_flight(robot: &RobotModel, policy: &Path, reference: &str, seed: u64, out: &Path) -> Result<(Vec<PathBuf>, Option<String>), ReportError> {
+pub fn render_flight(
+    robot: &RobotModel,
+    policy: &Path,
+    reference: &str,
+    seed: u64,
+    out: &Path,
+) -> Result<(Vec<PathBuf>, Option<String>), ReportError> {
     let (actor, task) = flapper_eval::load_flight_policy(policy).map_err(|e| ReportError::Policy(e.to_string()))?;
     let settings = ReportSettings { policy: policy.to_owned(), episodes: 1, seed, ..ReportSettings::default() };
-    let tracked = experiments::tracking(robot, &Pilot::Policy(Arc::new(actor)), &task, reference, &settings, &out.join("tracking"))?;
-    pictures::snapshots(robot, &[&tracked], settings.snapshot_size_px, out).map_err(|e| ReportError::step("rendering", e))?;
-    let mut written: Vec<PathBuf> = ["robot.png".to_owned(), format!("{}.png", pictures::file_stem(&tracked.name)), format!("{}_poster.png", pictures::file_stem(&tracked.name))]
-        .iter()
-        .map(|f| out.join(f))
-        .collect();
+    let tracked = experiments::tracking(
+        robot,
+        &Pilot::Policy(Arc::new(actor)),
+        &task,
+        reference,
+        &settings,
+        &out.join("tracking"),
+    )?;
+    pictures::snapshots(robot, &[&tracked], settings.snapshot_size_px, out)
+        .map_err(|e| ReportError::step("rendering", e))?;
+    let mut written: Vec<PathBuf> = [
+        "robot.png".to_owned(),
+        format!("{}.png", pictures::file_stem(&tracked.name)),
+        format!("{}_poster.png", pictures::file_stem(&tracked.name)),
+    ]
+    .iter()
+    .map(|f| out.join(f))
+    .collect();
     match pictures::video(robot, &tracked, settings.video_size_px, out) {
         Ok(()) => {
             written.push(out.join(format!("{}.mp4", pictures::file_stem(&tracked.name))));
             Ok((written, None))
         }
-        Err(flapper_render::RenderError::NoFfmpeg) => Ok((written, Some(flapper_render::RenderError::NoFfmpeg.to_string()))),
+        Err(flapper_render::RenderError::NoFfmpeg) => {
+            Ok((written, Some(flapper_render::RenderError::NoFfmpeg.to_string())))
+        }
         Err(e) => Err(ReportError::step("video", e)),
     }
 }

@@ -59,19 +59,29 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
     }
     all.push(Section { title: "flapper: the paper regenerated".into(), blocks: intro });
 
-    let comparison = rows.iter().map(|r| vec![r.claim.clone(), r.paper.clone(), r.flapper.clone(), r.verdict.clone()]).collect();
+    let comparison =
+        rows.iter().map(|r| vec![r.claim.clone(), r.paper.clone(), r.flapper.clone(), r.verdict.clone()]).collect();
     all.push(Section {
         title: "Paper vs flapper".into(),
-        blocks: vec![Block::Table(vec!["claim".into(), "paper".into(), "flapper (this run)".into(), "verdict".into()], comparison)],
+        blocks: vec![Block::Table(
+            vec!["claim".into(), "paper".into(), "flapper (this run)".into(), "verdict".into()],
+            comparison,
+        )],
     });
 
     all.push(Section {
         title: "Fig. 1: the robot".into(),
-        blocks: vec![figure("The robot rendered by MuJoCo, with its body frame and the five actuated joints (hinge axes in cyan).", "render/robot.png")],
+        blocks: vec![figure(
+            "The robot rendered by MuJoCo, with its body frame and the five actuated joints (hinge axes in cyan).",
+            "render/robot.png",
+        )],
     });
     all.push(Section {
         title: "Fig. 2: the loop".into(),
-        blocks: vec![figure("Snapshots every 0.3 s along a flown loop, seen from the side; red spheres: the reference every 0.1 s.", "render/loop.png")],
+        blocks: vec![figure(
+            "Snapshots every 0.3 s along a flown loop, seen from the side; red spheres: the reference every 0.1 s.",
+            "render/loop.png",
+        )],
     });
 
     let cruise = json(out, "tracking/cruise/summary.json");
@@ -110,15 +120,23 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
         title: "Fig. 5: system identification".into(),
         blocks: vec![
             Block::Table(
-                ["axis", "numerator", "denominator", "validation MSE (m^2)", "fit (%)", "BIBO stable", "minimum phase"].map(String::from).to_vec(),
+                ["axis", "numerator", "denominator", "validation MSE (m^2)", "fit (%)", "BIBO stable", "minimum phase"]
+                    .map(String::from)
+                    .to_vec(),
                 tf_rows,
             ),
-            figure("Poles (x) and zeros (o) of the identified closed loop, desired to flown position.", "sysid/pole_zero.svg"),
+            figure(
+                "Poles (x) and zeros (o) of the identified closed loop, desired to flown position.",
+                "sysid/pole_zero.svg",
+            ),
             figure("Validation: flown position against the identified models' prediction.", "sysid/validation.svg"),
         ],
     });
 
-    let mut phase = vec![figure("Right wing, cruise vs climb at 3.8 m/s (the paper's Fig. 6 flies 3 m/s).", "phase/phase_climb.svg")];
+    let mut phase = vec![figure(
+        "Right wing, cruise vs climb at 3.8 m/s (the paper's Fig. 6 flies 3 m/s).",
+        "phase/phase_climb.svg",
+    )];
     if out.join("phase/phase_turn.svg").exists() {
         phase.push(figure("Left vs right wing while turning left (Fig. 7).", "phase/phase_turn.svg"));
     }
@@ -129,7 +147,10 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
         figure("Lateral tracking: top and side views.", "tracking/lateral/path.svg"),
     ];
     for r in ["longitudinal", "lateral"] {
-        fig8.push(figure(&format!("Paths under constant winds on {r} (wind vectors drawn)."), &format!("robustness/{r}/robustness_wind.svg")));
+        fig8.push(figure(
+            &format!("Paths under constant winds on {r} (wind vectors drawn)."),
+            &format!("robustness/{r}/robustness_wind.svg"),
+        ));
     }
     let envelope = json(out, "robustness/longitudinal/robustness.json");
     let e = &envelope["envelope"];
@@ -158,13 +179,25 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
                     .map(|w| {
                         vec![
                             w["name"].as_str().unwrap_or("").to_owned(),
-                            format!("({}, {}, {})", fixed(&w["wind_mps"][0], 1), fixed(&w["wind_mps"][1], 1), fixed(&w["wind_mps"][2], 1)),
+                            format!(
+                                "({}, {}, {})",
+                                fixed(&w["wind_mps"][0], 1),
+                                fixed(&w["wind_mps"][1], 1),
+                                fixed(&w["wind_mps"][2], 1)
+                            ),
                             format!("{}/{}", w["successes"], w["episodes"]),
                             fixed(&w["mean_rms_error_m"], 3),
-                            format!("{}-{}", fixed(&w["needed_airspeed"]["slowest_mps"], 1), fixed(&w["needed_airspeed"]["fastest_mps"], 1)),
+                            format!(
+                                "{}-{}",
+                                fixed(&w["needed_airspeed"]["slowest_mps"], 1),
+                                fixed(&w["needed_airspeed"]["fastest_mps"], 1)
+                            ),
                             // The envelope (level flight) does not depend on the reference: the
                             // longitudinal run's serves the others.
-                            match w["inside_envelope"].as_bool().or_else(|| inside_longitudinal_envelope(&w["needed_airspeed"], e)) {
+                            match w["inside_envelope"]
+                                .as_bool()
+                                .or_else(|| inside_longitudinal_envelope(&w["needed_airspeed"], e))
+                            {
                                 Some(true) => "inside".to_owned(),
                                 Some(false) => "outside".to_owned(),
                                 None => "not measured".to_owned(),
@@ -176,7 +209,9 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             .unwrap_or_default();
         fig8.push(Block::Text(format!("Constant winds on {r}:")));
         fig8.push(Block::Table(
-            ["wind", "vector (m/s)", "success", "RMS error (m)", "airspeed needed (m/s)", "level envelope"].map(String::from).to_vec(),
+            ["wind", "vector (m/s)", "success", "RMS error (m)", "airspeed needed (m/s)", "level envelope"]
+                .map(String::from)
+                .to_vec(),
             rows,
         ));
     }
@@ -184,7 +219,12 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
 
     let mut fig9 = Vec::new();
     for r in ["longitudinal", "lateral"] {
-        fig9.push(figure(&format!("Success rate on {r} as each fluid coefficient (and all five) is randomized over x[1 - r, 1 + r]."), &format!("robustness/{r}/robustness_fluid.svg")));
+        fig9.push(figure(
+            &format!(
+                "Success rate on {r} as each fluid coefficient (and all five) is randomized over x[1 - r, 1 + r]."
+            ),
+            &format!("robustness/{r}/robustness_fluid.svg"),
+        ));
     }
     all.push(Section { title: "Fig. 9: robustness to the fluid coefficients".into(), blocks: fig9 });
 
@@ -194,8 +234,14 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             figure("The sharp 180 deg turn from above, snapshots every 0.2 s.", "render/sharp-turn.png"),
             figure("The loop from the side, every 0.3 s.", "render/loop.png"),
             figure("The roll-off-the-bottom from the side, every 0.3 s.", "render/roll-off-the-bottom.png"),
-            figure("The aerobatic trajectory, coloured by manoeuvre (dashed: reference).", "render/aerobatic_manoeuvres.svg"),
-            figure("The aerobatic flight from a chase camera (red: the reference every 0.2 s).", "render/aerobatic.mp4"),
+            figure(
+                "The aerobatic trajectory, coloured by manoeuvre (dashed: reference).",
+                "render/aerobatic_manoeuvres.svg",
+            ),
+            figure(
+                "The aerobatic flight from a chase camera (red: the reference every 0.2 s).",
+                "render/aerobatic.mp4",
+            ),
         ],
     });
 
@@ -217,10 +263,23 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
         title: "Tracking on every named reference".into(),
         blocks: vec![
             Block::Table(
-                ["reference", "completed", "RMS error mean (m)", "RMS worst (m)", "max error (m)", "airspeed (m/s)", "power, absolute (W)"].map(String::from).to_vec(),
+                [
+                    "reference",
+                    "completed",
+                    "RMS error mean (m)",
+                    "RMS worst (m)",
+                    "max error (m)",
+                    "airspeed (m/s)",
+                    "power, absolute (W)",
+                ]
+                .map(String::from)
+                .to_vec(),
                 tracking_rows,
             ),
-            figure("Flap amplitude, frequency and power in the longitudinal reference's segments: does the policy glide?", "modes/modes.svg"),
+            figure(
+                "Flap amplitude, frequency and power in the longitudinal reference's segments: does the policy glide?",
+                "modes/modes.svg",
+            ),
         ],
     });
 
@@ -232,7 +291,10 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             a.iter()
                 .map(|g| {
                     let mut row = vec![g["geom"].as_str().unwrap_or("").to_owned()];
-                    row.extend(["blunt_drag", "slender_drag", "angular_drag", "kutta_lift", "magnus_lift"].map(|k| fixed(&g[k], 2)));
+                    row.extend(
+                        ["blunt_drag", "slender_drag", "angular_drag", "kutta_lift", "magnus_lift"]
+                            .map(|k| fixed(&g[k], 2)),
+                    );
                     row
                 })
                 .collect()
@@ -245,11 +307,24 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
         vec!["joint damping".into(), interval("joint_damping_scale"), "x[0.9, 1.1]".into()],
         vec!["link mass".into(), interval("link_mass_scale"), "x[0.9, 1.1]".into()],
         vec!["link inertia".into(), interval("link_inertia_scale"), "x[0.9, 1.1]".into()],
-        vec!["centre of mass".into(), format!("+-{} mm", scaled(&r["link_com_offset_m"], 1000.0, 0)), "+-50 mm (ours: README, Randomization)".into()],
+        vec![
+            "centre of mass".into(),
+            format!("+-{} mm", scaled(&r["link_com_offset_m"], 1000.0, 0)),
+            "+-50 mm (ours: README, Randomization)".into(),
+        ],
         vec!["fluid coefficients (each)".into(), interval("fluid_coefficient_scale"), "x[0.7, 1.3]".into()],
         vec!["added mass".into(), interval("added_mass_scale"), "x[0.9, 1.1]".into()],
         vec!["added inertia".into(), interval("added_inertia_scale"), "x[0.9, 1.1]".into()],
-        vec!["wind x, y, z".into(), format!("+-{}, +-{}, +-{} m/s", fixed(&r["wind_mps"][0], 1), fixed(&r["wind_mps"][1], 1), fixed(&r["wind_mps"][2], 1)), "+-2, +-2, +-1.5 m/s".into()],
+        vec![
+            "wind x, y, z".into(),
+            format!(
+                "+-{}, +-{}, +-{} m/s",
+                fixed(&r["wind_mps"][0], 1),
+                fixed(&r["wind_mps"][1], 1),
+                fixed(&r["wind_mps"][2], 1)
+            ),
+            "+-2, +-2, +-1.5 m/s".into(),
+        ],
         vec!["share of episodes randomized".into(), fixed(&r["episode_fraction"], 2), "1".into()],
     ];
     all.push(Section {
@@ -289,7 +364,10 @@ fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String
             curves.push(figure(&format!("Learning curves of stage {}.", s["stage"]), &format!("training/{file}")));
         }
     }
-    let mut blocks = vec![Block::Table(["stage", "policy", "iterations", "runs", "env steps (M)", "wall time (min)"].map(String::from).to_vec(), training_rows)];
+    let mut blocks = vec![Block::Table(
+        ["stage", "policy", "iterations", "runs", "env steps (M)", "wall time (min)"].map(String::from).to_vec(),
+        training_rows,
+    )];
     blocks.push(Block::Text(format!(
         "In all: {} M steps in {} h ({} steps/s); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
         scaled(&training["total_env_steps"], 1.0 / 1e6, 1),
@@ -340,7 +418,10 @@ fn html(out: &Path, sections: &[Section]) -> String {
                 Block::Text(text) => page.push_str(&format!("<p>{}</p>\n", html_escape(text))),
                 Block::Figure(caption, path) => {
                     if !out.join(path).exists() {
-                        page.push_str(&format!("<p class=\"missing\">({} was not made: see the notes above.)</p>\n", html_escape(path)));
+                        page.push_str(&format!(
+                            "<p class=\"missing\">({} was not made: see the notes above.)</p>\n",
+                            html_escape(path)
+                        ));
                     } else if path.ends_with(".mp4") {
                         let poster = path.replace(".mp4", "_poster.png");
                         page.push_str(&format!(
@@ -350,7 +431,9 @@ fn html(out: &Path, sections: &[Section]) -> String {
                     } else {
                         page.push_str(&format!(
                             "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>\n",
-                            html_escape(path), html_escape(caption), html_escape(caption)
+                            html_escape(path),
+                            html_escape(caption),
+                            html_escape(caption)
                         ));
                     }
                 }
@@ -385,7 +468,9 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
         for block in &section.blocks {
             match block {
                 Block::Text(t) => text.push_str(&format!("{t}\n\n")),
-                Block::Figure(caption, path) if !out.join(path).exists() => text.push_str(&format!("({path} was not made: see the notes above.) {caption}\n\n")),
+                Block::Figure(caption, path) if !out.join(path).exists() => {
+                    text.push_str(&format!("({path} was not made: see the notes above.) {caption}\n\n"))
+                }
                 Block::Figure(caption, path) if path.ends_with(".mp4") => {
                     let poster = path.replace(".mp4", "_poster.png");
                     text.push_str(&format!("[![{caption}]({poster})]({path})\n\n*{caption} (click for the video)*\n\n"))
@@ -395,7 +480,10 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
                     text.push_str(&format!("| {} |\n", header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | ")));
                     text.push_str(&format!("|{}\n", "---|".repeat(header.len())));
                     for row in rows {
-                        text.push_str(&format!("| {} |\n", row.iter().map(|c| cell(c)).collect::<Vec<_>>().join(" | ")));
+                        text.push_str(&format!(
+                            "| {} |\n",
+                            row.iter().map(|c| cell(c)).collect::<Vec<_>>().join(" | ")
+                        ));
                     }
                     text.push('\n');
                 }
@@ -406,7 +494,13 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
 }
 
 /// Writes `index.html` and `report.md` into `out`; returns their paths.
-pub fn write(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String], wall_time_s: f64) -> Result<(PathBuf, PathBuf), ReportError> {
+pub fn write(
+    out: &Path,
+    settings: &ReportSettings,
+    rows: &[Row],
+    notes: &[String],
+    wall_time_s: f64,
+) -> Result<(PathBuf, PathBuf), ReportError> {
     let sections = sections(out, settings, rows, notes, wall_time_s);
     let (index, md) = (out.join("index.html"), out.join("report.md"));
     write_file(&index, html(out, &sections).as_bytes())?;
@@ -424,6 +518,7 @@ fn inside_longitudinal_envelope(needs: &Value, envelope: &Value) -> Option<bool>
         fastest_sustained_mps: envelope["fastest_sustained_mps"].as_f64(),
         fastest_flown_mps: envelope["fastest_flown_mps"].as_f64()?,
     };
-    let needs = NeededAirspeed { slowest_mps: needs["slowest_mps"].as_f64()?, fastest_mps: needs["fastest_mps"].as_f64()? };
+    let needs =
+        NeededAirspeed { slowest_mps: needs["slowest_mps"].as_f64()?, fastest_mps: needs["fastest_mps"].as_f64()? };
     needs.inside(&envelope)
 }

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use flapper_eval::tracking::{EpisodeResult, TrackingStep};
 use flapper_plot::{COLORS, Curve, Panel, RGBColor};
-use flapper_render::{CameraView, FlightRenderer, Marker, Pose, RenderError, VideoEncoder, chase_cameras, framing_camera, write_png};
+use flapper_render::{
+    CameraView, FlightRenderer, Marker, Pose, RenderError, VideoEncoder, chase_cameras, framing_camera, write_png,
+};
 use flapper_sim::RobotModel;
 
 use crate::ReportError;
@@ -38,7 +40,12 @@ fn reference_markers(tracked: &Tracked, start_s: f64, end_s: f64, every_s: f64, 
 }
 
 /// Fig. 1 and the overlays: `render/robot.png`, `render/<reference>.png`.
-pub fn snapshots(robot: &RobotModel, manoeuvres: &[&Tracked], (width, height): (usize, usize), dir: &Path) -> Result<(), RenderError> {
+pub fn snapshots(
+    robot: &RobotModel,
+    manoeuvres: &[&Tracked],
+    (width, height): (usize, usize),
+    dir: &Path,
+) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|e| RenderError::Write { path: dir.display().to_string(), source: e })?;
     let mut renderer = FlightRenderer::new(robot, width, height)?;
     // Fig. 1: wings raised and pitched, seen from the front left and above.
@@ -59,11 +66,13 @@ pub fn snapshots(robot: &RobotModel, manoeuvres: &[&Tracked], (width, height): (
         let episode = shown(tracked);
         let (azimuth_deg, elevation_deg) = view_of(episode, from_s, to_s);
         let stride = ((every_s / tracked.period_s).round() as usize).max(1);
-        let poses: Vec<Pose> = episode.steps.iter().filter(|s| (from_s..=to_s).contains(&s.time_s)).step_by(stride).map(pose).collect();
+        let poses: Vec<Pose> =
+            episode.steps.iter().filter(|s| (from_s..=to_s).contains(&s.time_s)).step_by(stride).map(pose).collect();
         let markers = reference_markers(tracked, from_s, to_s, 0.1, 0.035);
         let mut points: Vec<[f64; 3]> = poses.iter().map(|p| p.position_m).collect();
         points.extend(markers.iter().map(|m| m.position_m));
-        let camera = framing_camera(&points, azimuth_deg, elevation_deg, aspect, renderer.fovy_deg()).ok_or(RenderError::Empty("no poses in the manoeuvre"))?;
+        let camera = framing_camera(&points, azimuth_deg, elevation_deg, aspect, renderer.fovy_deg())
+            .ok_or(RenderError::Empty("no poses in the manoeuvre"))?;
         renderer.set_markers(markers)?;
         write_png(&renderer.overlay(&poses, &camera)?, &dir.join(format!("{}.png", file_stem(&tracked.name))))?;
     }
@@ -90,7 +99,12 @@ fn view_of(episode: &EpisodeResult, from_s: f64, to_s: f64) -> (f64, f64) {
 
 /// A flight from a chase camera: `<name>.mp4`, and the frame in the middle of its manoeuvre (or of
 /// the flight) as `<name>_poster.png`, written even without ffmpeg.
-pub fn video(robot: &RobotModel, aerobatic: &Tracked, (width, height): (usize, usize), dir: &Path) -> Result<(), RenderError> {
+pub fn video(
+    robot: &RobotModel,
+    aerobatic: &Tracked,
+    (width, height): (usize, usize),
+    dir: &Path,
+) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|e| RenderError::Write { path: dir.display().to_string(), source: e })?;
     let mut renderer = FlightRenderer::new(robot, width, height)?;
     let episode = shown(aerobatic);
@@ -106,7 +120,10 @@ pub fn video(robot: &RobotModel, aerobatic: &Tracked, (width, height): (usize, u
         .or_else(|| flapper_task::reference::named::manoeuvre_window_s(&aerobatic.name).map(|(s, e)| 0.5 * (s + e)))
         .unwrap_or(0.5 * aerobatic.reference.duration_s());
     let poster_index = steps.iter().position(|s| s.time_s >= poster_s).unwrap_or(0);
-    write_png(&renderer.render(&pose(steps[poster_index]), &cameras[poster_index])?, &dir.join(format!("{stem}_poster.png")))?;
+    write_png(
+        &renderer.render(&pose(steps[poster_index]), &cameras[poster_index])?,
+        &dir.join(format!("{stem}_poster.png")),
+    )?;
     let mut encoder = VideoEncoder::start(&dir.join(format!("{stem}.mp4")), width, height, VIDEO_FPS)?;
     for (step, camera) in steps.iter().zip(&cameras) {
         encoder.push(&renderer.render(&pose(step), camera)?)?;
@@ -132,19 +149,40 @@ pub fn aerobatic_manoeuvres(aerobatic: &Tracked, dir: &Path) -> Result<(), Repor
     };
     let view = |title: &str, pick: fn(&flapper_sim::Vec3) -> (f64, f64), y_label| {
         let reference: Vec<(f64, f64)> = episode.steps.iter().map(|s| pick(&s.target_m)).collect();
-        let mut curves = vec![Curve { label: "reference".into(), points: reference, color: RGBColor(0, 0, 0), dashed: true }];
+        let mut curves =
+            vec![Curve { label: "reference".into(), points: reference, color: RGBColor(0, 0, 0), dashed: true }];
         let mut named: Vec<&str> = Vec::new();
         for (label, start_s, end_s) in &spans {
-            let points: Vec<(f64, f64)> =
-                episode.steps.iter().filter(|s| s.time_s >= *start_s && s.time_s <= *end_s + 1e-9).map(|s| pick(&s.position_m)).collect();
+            let points: Vec<(f64, f64)> = episode
+                .steps
+                .iter()
+                .filter(|s| s.time_s >= *start_s && s.time_s <= *end_s + 1e-9)
+                .map(|s| pick(&s.position_m))
+                .collect();
             let first = !named.contains(label);
             named.push(label);
-            curves.push(Curve { label: if first { (*label).to_owned() } else { String::new() }, points, color: colour(label), dashed: false });
+            curves.push(Curve {
+                label: if first { (*label).to_owned() } else { String::new() },
+                points,
+                color: colour(label),
+                dashed: false,
+            });
         }
-        Panel { title: format!("aerobatic, flown by the policy: {title}"), x_label: "x (m)", y_label, curves, equal_aspect: true }
+        Panel {
+            title: format!("aerobatic, flown by the policy: {title}"),
+            x_label: "x (m)",
+            y_label,
+            curves,
+            equal_aspect: true,
+        }
     };
     let path = dir.join("aerobatic_manoeuvres.svg");
     std::fs::create_dir_all(dir).map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })?;
-    flapper_plot::draw(&path, (1100, 1000), &[view("top view", |p| (p.x, p.y), "y (m)"), view("side view", |p| (p.x, p.z), "z (m)")], (2, 1))
-        .map_err(|message| ReportError::Write { path, message })
+    flapper_plot::draw(
+        &path,
+        (1100, 1000),
+        &[view("top view", |p| (p.x, p.y), "y (m)"), view("side view", |p| (p.x, p.z), "z (m)")],
+        (2, 1),
+    )
+    .map_err(|message| ReportError::Write { path, message })
 }

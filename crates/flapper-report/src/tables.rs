@@ -14,15 +14,23 @@ use crate::{ReportError, write_file};
 pub fn training(stage_policies: &[PathBuf], dir: &Path) -> Result<(), ReportError> {
     let mut stages = Vec::new();
     for (k, policy) in stage_policies.iter().enumerate() {
-        let sidecar = policy.with_file_name(format!("{}.json", policy.file_name().map_or("".into(), |n| n.to_string_lossy().into_owned())));
+        let sidecar = policy.with_file_name(format!(
+            "{}.json",
+            policy.file_name().map_or("".into(), |n| n.to_string_lossy().into_owned())
+        ));
         if !sidecar.exists() {
             continue;
         }
         // A stage trained in several runs keeps the earlier runs' sidecars beside the policy
         // (`earlier_run*.safetensors.json`): their iterations, steps and time count too.
         let folder = policy.parent().unwrap_or(Path::new("."));
-        let mut sidecars: Vec<PathBuf> = std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
-        sidecars.retain(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")));
+        let mut sidecars: Vec<PathBuf> =
+            std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
+        sidecars.retain(|p| {
+            p.file_name().is_some_and(|n| {
+                n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")
+            })
+        });
         sidecars.sort();
         sidecars.insert(0, sidecar);
         let runs = sidecars.len();
@@ -66,8 +74,10 @@ pub fn model_tables(robot: &RobotModel, task: &TaskConfig, dir: &Path) -> Result
     for geom in LIFTING_SURFACE_GEOMS {
         let FluidCoefficients { blunt_drag, slender_drag, angular_drag, kutta_lift, magnus_lift } =
             sim.fluid_coefficients(geom).map_err(|e| ReportError::step("model tables", e))?;
-        surfaces.push(json!({ "geom": geom, "blunt_drag": blunt_drag, "slender_drag": slender_drag, "angular_drag": angular_drag,
-            "kutta_lift": kutta_lift, "magnus_lift": magnus_lift }));
+        surfaces.push(
+            json!({ "geom": geom, "blunt_drag": blunt_drag, "slender_drag": slender_drag, "angular_drag": angular_drag,
+            "kutta_lift": kutta_lift, "magnus_lift": magnus_lift }),
+        );
     }
     let d = robot.dimensions();
     let randomization = if task.randomization.enabled {

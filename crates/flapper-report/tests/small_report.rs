@@ -29,8 +29,14 @@ const FIGURES: [&str; 15] = [
     "training/stage1_learning_curves.svg",
     "training/stage3_learning_curves.svg",
 ];
-const PICTURES: [&str; 6] =
-    ["render/robot.png", "render/loop.png", "render/sharp-turn.png", "render/roll-off-the-bottom.png", "render/aerobatic_poster.png", "render/aerobatic.mp4"];
+const PICTURES: [&str; 6] = [
+    "render/robot.png",
+    "render/loop.png",
+    "render/sharp-turn.png",
+    "render/roll-off-the-bottom.png",
+    "render/aerobatic_poster.png",
+    "render/aerobatic.mp4",
+];
 
 #[test]
 fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
@@ -82,11 +88,17 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         let record = record.unwrap();
         let (claim, flapper, sources) = (&record[0], &record[2], &record[4]);
         assert_ne!(flapper, "not measured", "{claim}");
-        assert!(html.contains(&flapper.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")), "{claim}: not on the page");
+        assert!(
+            html.contains(
+                &flapper.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+            ),
+            "{claim}: not on the page"
+        );
         assert!(!sources.is_empty(), "{claim} names no source");
         for description in sources.split(' ') {
             let source = Source::parse(description).unwrap_or_else(|| panic!("{claim}: bad source '{description}'"));
-            let value = source.read(&out).unwrap_or_else(|| panic!("{claim}: '{description}' is not in the run's files"));
+            let value =
+                source.read(&out).unwrap_or_else(|| panic!("{claim}: '{description}' is not in the run's files"));
             assert!(flapper.contains(&value), "{claim}: '{flapper}' does not show {value} from {description}");
         }
         rows += 1;

@@ -26,7 +26,8 @@ pub struct StepTiming {
 pub fn time_steps(robot: &RobotModel, blocks: usize, steps_per_block: usize) -> Result<StepTiming, ModelError> {
     const SUBSTEPS: usize = 5;
     let mut sim = robot.instantiate()?;
-    let start = InitialState { linear_velocity_mps: Vec3::new(crate::CRUISE_SPEED_MPS, 0.0, 0.0), ..InitialState::default() };
+    let start =
+        InitialState { linear_velocity_mps: Vec3::new(crate::CRUISE_SPEED_MPS, 0.0, 0.0), ..InitialState::default() };
     let mut per_step_us = Vec::with_capacity(blocks);
     let mut per_control_us = Vec::with_capacity(blocks);
     for _ in 0..blocks.max(1) {

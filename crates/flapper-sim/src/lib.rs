@@ -18,6 +18,7 @@ pub use error::{ModelError, SimFault};
 pub use geometry::{Quat, Vec3, quat_from_euler, quat_from_wxyz, quat_rotate_inverse, quat_to_euler, quat_to_wxyz};
 pub use model::RobotModel;
 pub use robot::{
-    ActuatedJoint, BASE_JOINT, BODY_NAMES, CRUISE_SPEED_MPS, LIFTING_SURFACE_GEOMS, N_ACTUATED_JOINTS, ROBOT_MJCF, default_model_path,
+    ActuatedJoint, BASE_JOINT, BODY_NAMES, CRUISE_SPEED_MPS, LIFTING_SURFACE_GEOMS, N_ACTUATED_JOINTS, ROBOT_MJCF,
+    default_model_path,
 };
 pub use simulator::{FluidCoefficients, InitialState, Simulator};

@@ -53,8 +53,10 @@ impl RobotModel {
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         let origin = path.display().to_string();
         // Read it ourselves first: MuJoCo's message for a missing file is less clear than the OS's.
-        let mjcf = std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
-        let model = MjModel::from_xml(path).map_err(|e| ModelError::Load { origin: origin.clone(), message: e.to_string() })?;
+        let mjcf =
+            std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
+        let model =
+            MjModel::from_xml(path).map_err(|e| ModelError::Load { origin: origin.clone(), message: e.to_string() })?;
         Self::from_mujoco(model, origin, mjcf.into())
     }
 
@@ -212,7 +214,10 @@ fn check_physical(model: &MjModel, origin: &str) -> Result<(), ModelError> {
         let [low, high] = model.jnt_range()[id];
         // Actions map to +-min(high, -low) about zero, so the range must contain zero on both sides.
         if !(low.is_finite() && high.is_finite() && low < 0.0 && high > 0.0) {
-            return fail(format!("joint '{}' has range [{low:e}, {high:e}] (must be finite and contain 0 inside it)", joint.name()));
+            return fail(format!(
+                "joint '{}' has range [{low:e}, {high:e}] (must be finite and contain 0 inside it)",
+                joint.name()
+            ));
         }
     }
     Ok(())

@@ -153,9 +153,7 @@ impl Simulator {
 
     fn check_health(&self) -> Result<(), SimFault> {
         let time_s = self.data.time();
-        if let Some((kind, _)) =
-            self.data.warning().iter().enumerate().find(|(_, w)| w.number > 0)
-        {
+        if let Some((kind, _)) = self.data.warning().iter().enumerate().find(|(_, w)| w.number > 0) {
             return Err(SimFault::MujocoWarning { warning: warning_name(kind), time_s });
         }
         if !self.data.qpos().iter().all(|x| x.is_finite()) {
@@ -354,8 +352,7 @@ impl Simulator {
         let (damping, fluid, wind) = (nominal.dof_damping(), nominal.geom_fluid(), nominal.opt().wind);
         let model = self.edit_model();
         // Only mass, inertia and centre-of-mass changes need MuJoCo's constants recomputed at reset.
-        let inertial_changed =
-            model.body_mass() != mass || model.body_inertia() != inertia || model.body_ipos() != com;
+        let inertial_changed = model.body_mass() != mass || model.body_inertia() != inertia || model.body_ipos() != com;
         if inertial_changed {
             model.body_mass_mut().copy_from_slice(mass);
             model.body_inertia_mut().copy_from_slice(inertia);
@@ -405,10 +402,8 @@ impl Simulator {
 
 fn warning_name(kind: usize) -> &'static str {
     // Order of MuJoCo 3.17's mjtWarning.
-    const NAMES: [&str; 7] = [
-        "inertia", "contact buffer full", "constraint buffer full", "bad qpos", "bad qvel", "bad qacc",
-        "bad ctrl",
-    ];
+    const NAMES: [&str; 7] =
+        ["inertia", "contact buffer full", "constraint buffer full", "bad qpos", "bad qvel", "bad qacc", "bad ctrl"];
     NAMES.get(kind).copied().unwrap_or("unknown")
 }
 

@@ -17,9 +17,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let [stage, seed, envs, threads, actions, out] = args.as_slice() else {
         return Err("usage: vec_env_trace STAGE SEED ENVS THREADS ACTIONS OUT".into());
     };
-    let (stage, seed, count, threads): (i64, u64, usize, usize) = (stage.parse()?, seed.parse()?, envs.parse()?, threads.parse()?);
-    let actions: Vec<f32> = std::fs::read(actions)?.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-    let mut envs = FlightVecEnv::new(&RobotModel::flapper()?, TaskConfig::stage(stage)?, ReferenceSource::Procedural, count, seed, threads)?;
+    let (stage, seed, count, threads): (i64, u64, usize, usize) =
+        (stage.parse()?, seed.parse()?, envs.parse()?, threads.parse()?);
+    let actions: Vec<f32> =
+        std::fs::read(actions)?.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    let mut envs = FlightVecEnv::new(
+        &RobotModel::flapper()?,
+        TaskConfig::stage(stage)?,
+        ReferenceSource::Procedural,
+        count,
+        seed,
+        threads,
+    )?;
     let (mut observations, mut rewards, mut errors) = (envs.observations().to_vec(), Vec::new(), Vec::new());
     let (mut terminated, mut truncated) = (Vec::new(), Vec::new());
     for step_actions in actions.chunks_exact(count * 5) {

@@ -361,7 +361,11 @@ impl TaskConfig {
             ("randomization.added_inertia_scale", self.randomization.added_inertia_scale),
         ] {
             if !(interval[1] <= 10.0) {
-                return Err(ConfigError::Invalid { key, value: format!("{interval:?}"), why: "scales must be at most 10" });
+                return Err(ConfigError::Invalid {
+                    key,
+                    value: format!("{interval:?}"),
+                    why: "scales must be at most 10",
+                });
             }
         }
         if self.control.substeps == 0 {
@@ -401,7 +405,11 @@ impl TaskConfig {
             return invalid("episode.max_steps", "0".into(), "must be at least 1");
         }
         if !(self.episode.max_position_error_m > 0.0) {
-            return invalid("episode.max_position_error_m", self.episode.max_position_error_m.to_string(), "must be positive");
+            return invalid(
+                "episode.max_position_error_m",
+                self.episode.max_position_error_m.to_string(),
+                "must be positive",
+            );
         }
         let f = &self.reference;
         if !(f.command_duration_s >= 0.1) {
@@ -414,8 +422,14 @@ impl TaskConfig {
         ] {
             check_interval(key, interval)?;
         }
-        if !(f.forward_speed_mps[0] > 0.0 && f.forward_speed_mps[1] <= crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS) {
-            return invalid("reference.forward_speed_mps", format!("{:?}", f.forward_speed_mps), "must lie in (0, 15] m/s");
+        if !(f.forward_speed_mps[0] > 0.0
+            && f.forward_speed_mps[1] <= crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS)
+        {
+            return invalid(
+                "reference.forward_speed_mps",
+                format!("{:?}", f.forward_speed_mps),
+                "must lie in (0, 15] m/s",
+            );
         }
         if !(0.0..=1.0).contains(&f.loop_probability) {
             return invalid("reference.loop_probability", f.loop_probability.to_string(), "must be in [0, 1]");
@@ -424,7 +438,11 @@ impl TaskConfig {
             return invalid("reference.loop_duration_s", f.loop_duration_s.to_string(), "must be at least 1 s");
         }
         if !(0.0..=1.0).contains(&f.sharp_turn_probability) {
-            return invalid("reference.sharp_turn_probability", f.sharp_turn_probability.to_string(), "must be in [0, 1]");
+            return invalid(
+                "reference.sharp_turn_probability",
+                f.sharp_turn_probability.to_string(),
+                "must be in [0, 1]",
+            );
         }
         check_interval("reference.sharp_turn_deg", f.sharp_turn_deg)?;
         if !(f.sharp_turn_deg[0] >= 0.0 && f.sharp_turn_deg[1] <= 360.0) {
@@ -432,7 +450,11 @@ impl TaskConfig {
         }
         check_interval("reference.sharp_turn_duration_s", f.sharp_turn_duration_s)?;
         if !(f.sharp_turn_duration_s[0] >= 0.2 && f.sharp_turn_duration_s[1] <= 60.0) {
-            return invalid("reference.sharp_turn_duration_s", format!("{:?}", f.sharp_turn_duration_s), "must lie in [0.2, 60] s");
+            return invalid(
+                "reference.sharp_turn_duration_s",
+                format!("{:?}", f.sharp_turn_duration_s),
+                "must lie in [0.2, 60] s",
+            );
         }
         let g = &self.randomization;
         for (key, interval) in [
@@ -452,13 +474,21 @@ impl TaskConfig {
             return invalid("randomization.episode_fraction", g.episode_fraction.to_string(), "must be in [0, 1]");
         }
         if !(g.link_com_offset_m >= 0.0 && g.link_com_offset_m <= 0.1) {
-            return invalid("randomization.link_com_offset_m", g.link_com_offset_m.to_string(), "must be in [0, 0.1] m");
+            return invalid(
+                "randomization.link_com_offset_m",
+                g.link_com_offset_m.to_string(),
+                "must be in [0, 0.1] m",
+            );
         }
         if !g.wind_mps.iter().all(|w| (0.0..=20.0).contains(w)) {
             return invalid("randomization.wind_mps", format!("{:?}", g.wind_mps), "each must be in [0, 20] m/s");
         }
         if !g.steady_wind_mps.iter().all(|w| (-20.0..=20.0).contains(w)) {
-            return invalid("randomization.steady_wind_mps", format!("{:?}", g.steady_wind_mps), "each must be in [-20, 20] m/s");
+            return invalid(
+                "randomization.steady_wind_mps",
+                format!("{:?}", g.steady_wind_mps),
+                "each must be in [-20, 20] m/s",
+            );
         }
         Ok(())
     }
@@ -513,7 +543,9 @@ mod tests {
         assert!(!stages[2].episode.attitude_termination && !stages[3].episode.attitude_termination);
         assert!(stages[2].reference.yaw_rate_degps[1] > 0.0 && stages[2].reference.loop_probability > 0.0);
         assert!(stages[3].randomization.enabled && !stages[2].randomization.enabled);
-        assert!(stages[1].reference.vertical_speed_mps[0] < 0.0 && stages[0].reference.vertical_speed_mps == [0.0, 0.0]);
+        assert!(
+            stages[1].reference.vertical_speed_mps[0] < 0.0 && stages[0].reference.vertical_speed_mps == [0.0, 0.0]
+        );
         for s in &stages {
             assert_eq!(s.observation, stages[0].observation);
             assert_eq!(s.control, stages[0].control);
@@ -523,8 +555,11 @@ mod tests {
 
     #[test]
     fn toml_overrides_a_stage_preset() {
-        let c = TaskConfig::from_toml("stage = 2\n[reward]\nposition_scale_m = 0.5\n[control]\nfilter_cutoff_hz = 5.0\n", "t.toml")
-            .unwrap();
+        let c = TaskConfig::from_toml(
+            "stage = 2\n[reward]\nposition_scale_m = 0.5\n[control]\nfilter_cutoff_hz = 5.0\n",
+            "t.toml",
+        )
+        .unwrap();
         assert_eq!(c.stage, 2);
         assert_eq!(c.reward.position_scale_m, 0.5);
         assert_eq!(c.reward.position_weight, 0.5, "untouched keys keep the preset");
@@ -536,11 +571,13 @@ mod tests {
     fn unknown_keys_and_bad_values_are_named() {
         let err = TaskConfig::from_toml("[reward]\nposition_wieght = 0.3\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("bad.toml") && err.contains("position_wieght"), "{err}");
-        let err = TaskConfig::from_toml("[episode]\nmax_position_error_m = -1.0\n", "bad.toml").unwrap_err().to_string();
+        let err =
+            TaskConfig::from_toml("[episode]\nmax_position_error_m = -1.0\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("episode.max_position_error_m") && err.contains("-1"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
-        let err = TaskConfig::from_toml("[reference]\nforward_speed_mps = [5.0, 3.0]\n", "b.toml").unwrap_err().to_string();
+        let err =
+            TaskConfig::from_toml("[reference]\nforward_speed_mps = [5.0, 3.0]\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("forward_speed_mps"), "{err}");
         assert!(TaskConfig::from_toml("[control\n", "broken.toml").unwrap_err().to_string().contains("broken.toml"));
     }

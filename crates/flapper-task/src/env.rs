@@ -13,8 +13,8 @@ use crate::config::TaskConfig;
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
-use crate::reference::generator::procedural;
 use crate::reference::Reference;
+use crate::reference::generator::procedural;
 use crate::reward::{RewardInputs, RewardTerms};
 use crate::termination::{EpisodeEnd, check_failure};
 
@@ -67,11 +67,13 @@ pub struct EnvSnapshot {
 /// A fixed reference must be sampled at the control period: point k is the target at step k.
 fn check_reference_step(source: &ReferenceSource, period_s: f64) -> Result<(), ModelError> {
     match source {
-        ReferenceSource::Fixed(reference) if (reference.dt_s() - period_s).abs() > 1e-9 * period_s => Err(ModelError::InvalidValue {
-            what: format!("reference '{}' step", reference.name()),
-            value: format!("{} s", reference.dt_s()),
-            why: "differs from the control period of this model and task: resample it at the control period",
-        }),
+        ReferenceSource::Fixed(reference) if (reference.dt_s() - period_s).abs() > 1e-9 * period_s => {
+            Err(ModelError::InvalidValue {
+                what: format!("reference '{}' step", reference.name()),
+                value: format!("{} s", reference.dt_s()),
+                why: "differs from the control period of this model and task: resample it at the control period",
+            })
+        }
         _ => Ok(()),
     }
 }
@@ -235,7 +237,8 @@ impl FlightEnv {
             None
         };
         // A broken state earns nothing and is not observed.
-        let (reward, terms) = if fault.is_some() { (0.0, RewardTerms::default()) } else { (terms.total(&self.config.reward), terms) };
+        let (reward, terms) =
+            if fault.is_some() { (0.0, RewardTerms::default()) } else { (terms.total(&self.config.reward), terms) };
         if fault.is_none() {
             self.observation.push(read_frame(self.control.sim(), &self.previous_action));
         }
@@ -269,7 +272,11 @@ impl FlightEnv {
     /// index: replays its reset, then restores what evolved since.
     pub fn restore(&mut self, snapshot: &EnvSnapshot) -> Result<(), ModelError> {
         let index = self.index;
-        let invalid = move |why| ModelError::InvalidValue { what: "environment snapshot".into(), value: format!("environment {index}"), why };
+        let invalid = move |why| ModelError::InvalidValue {
+            what: "environment snapshot".into(),
+            value: format!("environment {index}"),
+            why,
+        };
         if snapshot.time_limit_steps > self.config.episode.max_steps || snapshot.step >= snapshot.time_limit_steps {
             return Err(invalid("its episode does not fit this task's time limit"));
         }

@@ -10,8 +10,8 @@
 //! - `env`, `vec_env`: one environment, and N of them stepped in parallel.
 
 pub mod action;
-pub mod benchmark;
 mod action_filter;
+pub mod benchmark;
 pub mod config;
 mod control_loop;
 pub mod env;

@@ -50,9 +50,8 @@ impl ObservationLayout {
 
     /// A name for every index, e.g. `t-24.quat_w`, `t-0.action.tail_pitch`, `ahead+01.x_body_m`.
     pub fn names(&self) -> Vec<String> {
-        let mut frame_fields: Vec<String> = ["quat_w", "quat_x", "quat_y", "quat_z", "p_radps", "q_radps", "r_radps"]
-            .map(String::from)
-            .to_vec();
+        let mut frame_fields: Vec<String> =
+            ["quat_w", "quat_x", "quat_y", "quat_z", "p_radps", "q_radps", "r_radps"].map(String::from).to_vec();
         frame_fields.extend(ActuatedJoint::ALL.map(|j| format!("joint.{}_rad", j.name())));
         frame_fields.push("airspeed_mps".into());
         frame_fields.extend(ActuatedJoint::ALL.map(|j| format!("action.{}", j.name())));

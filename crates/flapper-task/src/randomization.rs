@@ -29,7 +29,11 @@ fn draw_symmetric(rng: &mut impl Rng, half_width: f64) -> f64 {
 }
 
 /// Restores the nominal model, then (if enabled) draws and applies new dynamics.
-pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut impl Rng) -> Result<DrawnDynamics, ModelError> {
+pub fn randomize(
+    sim: &mut Simulator,
+    config: &RandomizationConfig,
+    rng: &mut impl Rng,
+) -> Result<DrawnDynamics, ModelError> {
     sim.restore_nominal_parameters();
     let mut drawn = DrawnDynamics::default();
     if !config.enabled {
@@ -62,9 +66,13 @@ pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut im
     for geom in LIFTING_SURFACE_GEOMS {
         // All five are drawn whichever are applied, so the random stream does not depend on the choice.
         let drawn_scales: [f64; 5] = std::array::from_fn(|_| draw(rng, config.fluid_coefficient_scale));
-        let scales: [f64; 5] = std::array::from_fn(|i| if config.fluid_coefficients_randomized[i] { drawn_scales[i] } else { 1.0 });
+        let scales: [f64; 5] =
+            std::array::from_fn(|i| if config.fluid_coefficients_randomized[i] { drawn_scales[i] } else { 1.0 });
         let nominal = sim.fluid_coefficients(geom)?.to_array();
-        sim.set_fluid_coefficients(geom, FluidCoefficients::from_array(std::array::from_fn(|i| nominal[i] * scales[i])))?;
+        sim.set_fluid_coefficients(
+            geom,
+            FluidCoefficients::from_array(std::array::from_fn(|i| nominal[i] * scales[i])),
+        )?;
         let (mass_scale, inertia_scale) = (draw(rng, config.added_mass_scale), draw(rng, config.added_inertia_scale));
         sim.set_added_mass(geom, sim.added_mass(geom)?.map(|m| m * mass_scale))?;
         sim.set_added_inertia(geom, sim.added_inertia(geom)?.map(|i| i * inertia_scale))?;
@@ -74,7 +82,8 @@ pub fn randomize(sim: &mut Simulator, config: &RandomizationConfig, rng: &mut im
     }
     let [wx, wy, wz] = config.wind_mps;
     let [sx, sy, sz] = config.steady_wind_mps;
-    drawn.wind_mps = Vec3::new(sx + draw_symmetric(rng, wx), sy + draw_symmetric(rng, wy), sz + draw_symmetric(rng, wz));
+    drawn.wind_mps =
+        Vec3::new(sx + draw_symmetric(rng, wx), sy + draw_symmetric(rng, wy), sz + draw_symmetric(rng, wz));
     sim.set_wind(drawn.wind_mps)?;
     Ok(drawn)
 }

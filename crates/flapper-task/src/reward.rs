@@ -64,7 +64,13 @@ mod tests {
     use super::*;
 
     fn ideal() -> RewardInputs {
-        RewardInputs { position_error_m: 0.0, body_rate_radps: 0.0, roll_rad: 0.0, pitch_rad: 0.0, absolute_power_w: 0.0 }
+        RewardInputs {
+            position_error_m: 0.0,
+            body_rate_radps: 0.0,
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+            absolute_power_w: 0.0,
+        }
     }
 
     #[test]
@@ -78,7 +84,9 @@ mod tests {
     #[test]
     fn each_term_falls_as_its_error_grows_and_stays_bounded() {
         let c = RewardConfig::default();
-        let worse: [(&str, fn(f64) -> RewardInputs, fn(&RewardTerms) -> f64); 4] = [
+        /// A term's name, its input made worse by x, and the term read from the result.
+        type Worsening = (&'static str, fn(f64) -> RewardInputs, fn(&RewardTerms) -> f64);
+        let worse: [Worsening; 4] = [
             ("position", |x| RewardInputs { position_error_m: x, ..ideal() }, |t| t.position),
             ("body rate", |x| RewardInputs { body_rate_radps: x, ..ideal() }, |t| t.body_rate),
             ("level", |x| RewardInputs { roll_rad: x, pitch_rad: -x, ..ideal() }, |t| t.level),

@@ -38,7 +38,12 @@ impl EpisodeEnd {
 }
 
 /// The failure conditions, checked after every control step.
-pub fn check_failure(config: &EpisodeConfig, position_error_m: f64, roll_rad: f64, pitch_rad: f64) -> Option<EpisodeEnd> {
+pub fn check_failure(
+    config: &EpisodeConfig,
+    position_error_m: f64,
+    roll_rad: f64,
+    pitch_rad: f64,
+) -> Option<EpisodeEnd> {
     if !(position_error_m <= config.max_position_error_m) {
         return Some(EpisodeEnd::TooFarFromTarget);
     }

@@ -57,10 +57,8 @@ impl FlightVecEnv {
             .map(|index| FlightEnv::new(robot, config.clone(), source.clone(), seed, index))
             .collect::<Result<Vec<_>, _>>()?;
         let observation_size = envs.first().map_or(0, |e| e.observation_layout().size());
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| ModelError::InvalidValue {
+        let pool =
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| ModelError::InvalidValue {
                 what: "threads".into(),
                 value: format!("{threads} ({e})"),
                 why: "could not start the worker threads",

@@ -86,7 +86,9 @@ fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();
     let config = Arc::new(exact_start(TaskConfig::default()));
-    let mut env = FlightEnv::new(&robot(), config, ReferenceSource::Fixed(Arc::new(Reference::new("up", 0.02, points))), 1, 0).unwrap();
+    let mut env =
+        FlightEnv::new(&robot(), config, ReferenceSource::Fixed(Arc::new(Reference::new("up", 0.02, points))), 1, 0)
+            .unwrap();
     let end = (0..500).find_map(|_| env.step(&[0.0; 5]).end).expect("episode should end");
     assert_eq!(end, EpisodeEnd::TooFarFromTarget);
     assert!(end.is_termination());
@@ -149,7 +151,10 @@ fn randomization_draws_within_table_iii_and_reads_back_from_the_model() {
             assert!(shift.abs().max_element() <= ranges.link_com_offset_m + 1e-12);
         }
         for geom in ["wing_left", "wing_right", "tail"] {
-            let (c, c0) = (sim.fluid_coefficients(geom).unwrap().to_array(), nominal.fluid_coefficients(geom).unwrap().to_array());
+            let (c, c0) = (
+                sim.fluid_coefficients(geom).unwrap().to_array(),
+                nominal.fluid_coefficients(geom).unwrap().to_array(),
+            );
             for (value, base) in c.iter().zip(c0) {
                 assert!((0.7 - 1e-12..=1.3 + 1e-12).contains(&(value / base)), "{geom} fluid x{}", value / base);
             }
@@ -168,7 +173,8 @@ fn randomization_draws_within_table_iii_and_reads_back_from_the_model() {
     }
     assert!(winds.windows(2).all(|w| w[0] != w[1]), "each episode draws anew");
     // Stage 3 leaves the model nominal.
-    let plain = FlightEnv::new(&robot, Arc::new(TaskConfig::stage(3).unwrap()), ReferenceSource::Procedural, 42, 3).unwrap();
+    let plain =
+        FlightEnv::new(&robot, Arc::new(TaskConfig::stage(3).unwrap()), ReferenceSource::Procedural, 42, 3).unwrap();
     assert_eq!(plain.control().sim().wind(), Vec3::ZERO);
     assert_eq!(plain.control().sim().body_mass("tail").unwrap(), nominal.body_mass("tail").unwrap());
 }
@@ -194,12 +200,16 @@ fn an_episode_fraction_leaves_the_other_episodes_nominal_in_still_air() {
 }
 
 fn run(seed: u64, threads: usize, stage: i64) -> (Vec<f32>, Vec<f32>, usize) {
-    let mut envs = FlightVecEnv::new(&robot(), TaskConfig::stage(stage).unwrap(), ReferenceSource::Procedural, 8, seed, threads).unwrap();
+    let mut envs =
+        FlightVecEnv::new(&robot(), TaskConfig::stage(stage).unwrap(), ReferenceSource::Procedural, 8, seed, threads)
+            .unwrap();
     let mut rewards = Vec::new();
     let mut finished = 0;
     for k in 0..150 {
         let phase = k as f32 * 0.66;
-        let actions: Vec<f32> = (0..8).flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32]).collect();
+        let actions: Vec<f32> = (0..8)
+            .flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32])
+            .collect();
         envs.step(&actions).unwrap();
         rewards.extend_from_slice(envs.rewards());
         finished += envs.take_finished_episodes().len();
@@ -279,7 +289,11 @@ fn a_truncated_episode_keeps_its_final_observation_and_restart_replays_the_start
     }
     let mut expected = vec![0.0; size];
     twin.observe(&mut expected);
-    assert_eq!(&envs.final_observations()[size..2 * size], expected.as_slice(), "the last observation before the reset");
+    assert_eq!(
+        &envs.final_observations()[size..2 * size],
+        expected.as_slice(),
+        "the last observation before the reset"
+    );
     assert_ne!(&envs.observations()[size..], expected.as_slice(), "the current observation is the new episode's");
 
     // Restarting from the construction seed gives the first episode's start again.
@@ -293,7 +307,9 @@ fn fly(envs: &mut FlightVecEnv, steps: usize, from: usize) -> (Vec<f32>, Vec<(us
     let (mut rewards, mut ends) = (Vec::new(), Vec::new());
     for k in from..from + steps {
         let phase = k as f32 * 0.66;
-        let actions: Vec<f32> = (0..n).flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32]).collect();
+        let actions: Vec<f32> = (0..n)
+            .flat_map(|i| [phase.sin(), 0.3 * phase.cos(), phase.sin(), 0.3 * phase.cos(), -0.4 + 0.05 * i as f32])
+            .collect();
         envs.step(&actions).unwrap();
         rewards.extend_from_slice(envs.rewards());
         ends.extend(envs.take_finished_episodes().into_iter().map(|e| (e.env_index, e.length, e.end)));
@@ -320,7 +336,8 @@ fn a_snapshot_continues_every_episode_bit_for_bit() {
     assert_eq!(a, b);
     assert_eq!(resumed.observations(), original.observations());
     // A snapshot of another batch size is refused.
-    let mut other = FlightVecEnv::new(&robot(), TaskConfig::stage(4).unwrap(), ReferenceSource::Procedural, 4, 21, 1).unwrap();
+    let mut other =
+        FlightVecEnv::new(&robot(), TaskConfig::stage(4).unwrap(), ReferenceSource::Procedural, 4, 21, 1).unwrap();
     assert!(other.restore(&snapshot).is_err());
 }
 
@@ -355,8 +372,10 @@ fn a_reference_sampled_at_another_step_than_the_control_period_is_refused() {
     let robot = robot();
     let config = Arc::new(TaskConfig::stage(3).unwrap());
     let period = config.control_period_s(robot.timestep_s());
-    let at = |dt_s: f64| ReferenceSource::Fixed(Arc::new(named("cruise", Vec3::new(0.0, 0.0, 10.0), dt_s, 1.0).unwrap()));
-    let error = FlightEnv::new(&robot, config.clone(), at(period / 2.0), 1, 0).err().expect("half the period is refused");
+    let at =
+        |dt_s: f64| ReferenceSource::Fixed(Arc::new(named("cruise", Vec3::new(0.0, 0.0, 10.0), dt_s, 1.0).unwrap()));
+    let error =
+        FlightEnv::new(&robot, config.clone(), at(period / 2.0), 1, 0).err().expect("half the period is refused");
     assert!(error.to_string().contains("control period"), "{error}");
     let mut env = FlightEnv::new(&robot, config.clone(), at(period), 1, 0).unwrap();
     assert!(env.set_reference_source(at(2.0 * period)).is_err());

@@ -32,7 +32,8 @@ fn every_named_reference_exists_and_moves() {
 fn longitudinal_and_lateral_have_the_papers_durations_and_speeds() {
     let lon = named("longitudinal", Vec3::ZERO, DT, 0.0).unwrap();
     assert!((lon.duration_s() - 24.0).abs() < 0.03, "{}", lon.duration_s());
-    let horizontal = |r: &flapper_task::reference::Reference, k: usize| (r.target(k + 1) - r.target(k)).truncate().length() / DT;
+    let horizontal =
+        |r: &flapper_task::reference::Reference, k: usize| (r.target(k + 1) - r.target(k)).truncate().length() / DT;
     assert!((horizontal(&lon, 100) - 3.8).abs() < 1e-9);
     // Climb during the second 6 s, descend during the last 12 s.
     assert!(lon.target(600).z - lon.target(300).z > 2.0);
@@ -47,7 +48,12 @@ fn longitudinal_and_lateral_have_the_papers_durations_and_speeds() {
 fn a_loop_returns_to_its_start_height_and_heading() {
     let r = named("loop", Vec3::new(0.0, 0.0, 10.0), DT, 0.0).unwrap();
     let (before, after) = (150, 300); // loop from 3 s to 6 s
-    assert!((r.target(after).z - r.target(before).z).abs() < 0.02, "height {} vs {}", r.target(after).z, r.target(before).z);
+    assert!(
+        (r.target(after).z - r.target(before).z).abs() < 0.02,
+        "height {} vs {}",
+        r.target(after).z,
+        r.target(before).z
+    );
     let top = r.points()[before..after].iter().map(|p| p.z).fold(f64::MIN, f64::max);
     assert!(top - 10.0 > 3.0, "loop top only {:.2} m up", top - 10.0);
     assert!(heading_deg(&r, after + 5).abs() < 1.0);

@@ -23,7 +23,12 @@ pub struct TrainingThroughput {
 
 /// Trains `iterations + 1` iterations of the default stage-1 run with `envs` environments on
 /// `threads` threads (0 = all cores) in a scratch folder, which is removed afterwards.
-pub fn time_training(robot: &RobotModel, envs: usize, threads: usize, iterations: usize) -> Result<TrainingThroughput, RunError> {
+pub fn time_training(
+    robot: &RobotModel,
+    envs: usize,
+    threads: usize,
+    iterations: usize,
+) -> Result<TrainingThroughput, RunError> {
     let mut config = TrainConfig::from_toml("", "benchmark", None)?;
     config.runner.envs = envs;
     config.runner.threads = threads;
@@ -41,8 +46,9 @@ pub fn time_training(robot: &RobotModel, envs: usize, threads: usize, iterations
     let timed = &history[1..];
     let mut rates: Vec<f64> = timed.iter().map(|l| l.steps_per_s).collect();
     rates.sort_by(f64::total_cmp);
-    let (env, inference, update) =
-        timed.iter().fold((0.0, 0.0, 0.0), |t, l| (t.0 + l.env_time_s, t.1 + l.inference_time_s, t.2 + l.update_time_s));
+    let (env, inference, update) = timed
+        .iter()
+        .fold((0.0, 0.0, 0.0), |t, l| (t.0 + l.env_time_s, t.1 + l.inference_time_s, t.2 + l.update_time_s));
     let total = env + inference + update;
     Ok(TrainingThroughput {
         envs,

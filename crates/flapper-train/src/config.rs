@@ -94,8 +94,12 @@ mod tests {
 
     #[test]
     fn written_config_reads_back_identically_and_stage_overrides() {
-        let c = TrainConfig::from_toml("[runner]\niterations = 7\n[task]\nstage = 2\n[task.reward]\nposition_scale_m = 0.7\n", "a.toml", None)
-            .unwrap();
+        let c = TrainConfig::from_toml(
+            "[runner]\niterations = 7\n[task]\nstage = 2\n[task.reward]\nposition_scale_m = 0.7\n",
+            "a.toml",
+            None,
+        )
+        .unwrap();
         assert_eq!(c.runner.iterations, 7);
         assert_eq!(c.task.stage, 2);
         let again = TrainConfig::from_toml(&c.to_toml(), "b.toml", None).unwrap();

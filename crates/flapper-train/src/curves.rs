@@ -22,8 +22,19 @@ pub fn write_learning_curves(rows: &[IterationLog], end_reasons: &[&str], path: 
     let series = |f: &dyn Fn(&IterationLog) -> f64| -> Vec<(f64, f64)> {
         rows.iter().map(|r| (r.env_steps as f64 / 1e6, f(r))).filter(|(_, y)| y.is_finite()).collect()
     };
-    let curve = |label: &str, points, k: usize| Curve { label: label.to_owned(), points, color: COLORS[k % COLORS.len()], dashed: false };
-    let panel = |title: &str, y_label, curves| Panel { title: title.to_owned(), x_label: "environment steps (millions)", y_label, curves, equal_aspect: false };
+    let curve = |label: &str, points, k: usize| Curve {
+        label: label.to_owned(),
+        points,
+        color: COLORS[k % COLORS.len()],
+        dashed: false,
+    };
+    let panel = |title: &str, y_label, curves| Panel {
+        title: title.to_owned(),
+        x_label: "environment steps (millions)",
+        y_label,
+        curves,
+        equal_aspect: false,
+    };
     let ends = end_reasons
         .iter()
         .enumerate()
@@ -39,14 +50,22 @@ pub fn write_learning_curves(rows: &[IterationLog], end_reasons: &[&str], path: 
         panel("mean episode return", "return", vec![curve("return", series(&|r| r.mean_return), 0)]),
         panel("mean episode length", "steps", vec![curve("length", series(&|r| r.mean_length), 0)]),
         panel("how episodes end", "fraction of episodes", ends),
-        panel("losses", "loss", vec![
-            curve("value", series(&|r| r.update.value_loss), 0),
-            curve("surrogate", series(&|r| r.update.surrogate_loss), 1),
-        ]),
-        panel("KL and learning rate (x 10)", "", vec![
-            curve("KL", series(&|r| r.update.kl), 0),
-            curve("learning rate x 10", series(&|r| 10.0 * r.update.learning_rate), 1),
-        ]),
+        panel(
+            "losses",
+            "loss",
+            vec![
+                curve("value", series(&|r| r.update.value_loss), 0),
+                curve("surrogate", series(&|r| r.update.surrogate_loss), 1),
+            ],
+        ),
+        panel(
+            "KL and learning rate (x 10)",
+            "",
+            vec![
+                curve("KL", series(&|r| r.update.kl), 0),
+                curve("learning rate x 10", series(&|r| 10.0 * r.update.learning_rate), 1),
+            ],
+        ),
         panel("action noise", "mean std", vec![curve("std", series(&|r| r.update.action_std), 0)]),
         panel("mean reward per step", "reward", vec![curve("reward", series(&|r| r.mean_reward), 0)]),
         panel("throughput", "environment steps / s", vec![curve("steps/s", series(&|r| r.steps_per_s), 0)]),

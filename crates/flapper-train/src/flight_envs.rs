@@ -40,7 +40,13 @@ pub struct FlightEnvs {
 impl FlightEnvs {
     /// `count` environments on procedural references from `task` on `threads` threads (0 = all cores),
     /// their first episodes cut at spread-out lengths so that launches do not come in bursts.
-    pub fn new(robot: &RobotModel, task: TaskConfig, count: usize, seed: u64, threads: usize) -> Result<Self, ModelError> {
+    pub fn new(
+        robot: &RobotModel,
+        task: TaskConfig,
+        count: usize,
+        seed: u64,
+        threads: usize,
+    ) -> Result<Self, ModelError> {
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
         Ok(Self { diagnostics: vec![0.0; count * REWARD_TERM_NAMES.len()], inner })

@@ -84,10 +84,12 @@ pub struct InvertedPendulumEnvs {
 
 impl InvertedPendulumEnvs {
     pub fn new(count: usize, seed: u64) -> Result<Self, EnvError> {
-        let model = MjModel::from_xml_string(INVERTED_PENDULUM_MJCF).map_err(|e| format!("inverted pendulum model: {e}"))?;
+        let model =
+            MjModel::from_xml_string(INVERTED_PENDULUM_MJCF).map_err(|e| format!("inverted pendulum model: {e}"))?;
         let envs = (0..count)
             .map(|_| {
-                let data = MjData::try_new(Box::new(model.clone())).map_err(|e| format!("inverted pendulum data: {e}"))?;
+                let data =
+                    MjData::try_new(Box::new(model.clone())).map_err(|e| format!("inverted pendulum data: {e}"))?;
                 Ok(Pendulum { data, rng: ChaCha8Rng::seed_from_u64(0), steps: 0, episode_return: 0.0 })
             })
             .collect::<Result<Vec<_>, EnvError>>()?;
@@ -213,10 +215,14 @@ impl VecEnv for InvertedPendulumEnvs {
     fn restore_state(&mut self, state: &[u8]) -> Result<(), EnvError> {
         let snapshots: Vec<PendulumSnapshot> = serde_json::from_slice(state)?;
         if snapshots.len() != self.envs.len() {
-            return Err(format!("saved state holds {} pendulums, this batch {}", snapshots.len(), self.envs.len()).into());
+            return Err(
+                format!("saved state holds {} pendulums, this batch {}", snapshots.len(), self.envs.len()).into()
+            );
         }
         for (i, (env, saved)) in self.envs.iter_mut().zip(snapshots).enumerate() {
-            env.data.set_state(&saved.physics, MjtState::mjSTATE_INTEGRATION as u32).map_err(|e| format!("pendulum state: {e}"))?;
+            env.data
+                .set_state(&saved.physics, MjtState::mjSTATE_INTEGRATION as u32)
+                .map_err(|e| format!("pendulum state: {e}"))?;
             env.data.forward();
             env.rng = saved.rng;
             env.steps = saved.steps;

@@ -33,7 +33,12 @@ pub fn saved_config(dir: &Path) -> Result<TrainConfig, RunError> {
 }
 
 /// A trainer for the flight task in `dir`.
-pub fn flight_trainer(robot: &RobotModel, config: &TrainConfig, dir: &Path, start: Start) -> Result<Trainer<FlightEnvs>, RunError> {
+pub fn flight_trainer(
+    robot: &RobotModel,
+    config: &TrainConfig,
+    dir: &Path,
+    start: Start,
+) -> Result<Trainer<FlightEnvs>, RunError> {
     let r = &config.runner;
     let envs = FlightEnvs::new(robot, config.task.clone(), r.envs, r.seed, r.thread_count())?;
     let mut trainer = Trainer::new(envs, config.ppo.clone(), r.clone(), config.to_toml(), dir, start)?;
@@ -44,7 +49,14 @@ pub fn flight_trainer(robot: &RobotModel, config: &TrainConfig, dir: &Path, star
 /// Settings for the inverted pendulum: rsl_rl's PPO with smaller networks and fewer environments.
 pub fn pendulum_settings(seed: u64, max_iterations: usize) -> (PpoConfig, RunnerConfig) {
     let ppo = PpoConfig { actor_hidden: vec![64, 64], critic_hidden: vec![64, 64], ..PpoConfig::default() };
-    let runner = RunnerConfig { envs: 64, iterations: max_iterations, seed, threads: 1, checkpoint_every: 1000, init_from_noise_std: None };
+    let runner = RunnerConfig {
+        envs: 64,
+        iterations: max_iterations,
+        seed,
+        threads: 1,
+        checkpoint_every: 1000,
+        init_from_noise_std: None,
+    };
     (ppo, runner)
 }
 
@@ -61,13 +73,19 @@ pub struct PendulumOutcome {
 
 /// Trains on the inverted pendulum until the mean policy scores 1000 on `check_episodes` fresh test
 /// episodes (tested whenever the last 10 training episodes all reached the time limit).
-pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes: usize, dir: &Path) -> Result<PendulumOutcome, RunError> {
+pub fn solve_inverted_pendulum(
+    seed: u64,
+    max_iterations: usize,
+    check_episodes: usize,
+    dir: &Path,
+) -> Result<PendulumOutcome, RunError> {
     let (ppo, runner) = pendulum_settings(seed, max_iterations);
     let envs = InvertedPendulumEnvs::new(runner.envs, seed).map_err(TrainError::Env)?;
     let config_text = format!("# inverted pendulum check, seed {seed}\n");
     let mut trainer = Trainer::new(envs, ppo, runner, config_text, dir, Start::Fresh)?;
     trainer.add_checkpoint_hook(crate::curves::learning_curves_hook());
-    let time_limit_column = PendulumEnd::ALL.iter().position(|r| *r == PendulumEnd::TimeLimit).expect("the pendulum reports time limits");
+    let time_limit_column =
+        PendulumEnd::ALL.iter().position(|r| *r == PendulumEnd::TimeLimit).expect("the pendulum reports time limits");
     let mut recent: Vec<f64> = Vec::new();
     let mut outcome = PendulumOutcome { steps_to_solve: None, iterations: 0, test_returns: Vec::new() };
     let mut test_error = None;
@@ -87,7 +105,9 @@ pub fn solve_inverted_pendulum(seed: u64, max_iterations: usize, check_episodes:
             match test {
                 Ok(episodes) => {
                     outcome.test_returns = episodes.iter().map(|e| e.episode_return).collect();
-                    if episodes.len() == check_episodes && episodes.iter().all(|e| e.episode_return >= MAX_EPISODE_STEPS as f64) {
+                    if episodes.len() == check_episodes
+                        && episodes.iter().all(|e| e.episode_return >= MAX_EPISODE_STEPS as f64)
+                    {
                         outcome.steps_to_solve = Some(log.env_steps);
                         return false;
                     }

@@ -19,10 +19,16 @@ fn scratch_dir(name: &str) -> PathBuf {
 fn ppo_solves_the_inverted_pendulum() {
     let dir = scratch_dir("pendulum");
     let outcome = solve_inverted_pendulum(1, 400, 5, &dir).unwrap();
-    let steps = outcome.steps_to_solve.unwrap_or_else(|| panic!("not solved in {} iterations: {:?}", outcome.iterations, outcome.test_returns));
+    let steps = outcome
+        .steps_to_solve
+        .unwrap_or_else(|| panic!("not solved in {} iterations: {:?}", outcome.iterations, outcome.test_returns));
     assert!(steps <= 600_000, "solved only after {steps} steps");
     assert!(outcome.test_returns.iter().all(|&r| r == 1000.0));
-    assert!(dir.join("policy.safetensors").exists() && dir.join("training.csv").exists() && dir.join("learning_curves.svg").exists());
+    assert!(
+        dir.join("policy.safetensors").exists()
+            && dir.join("training.csv").exists()
+            && dir.join("learning_curves.svg").exists()
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -49,7 +55,9 @@ fn csv_numbers(dir: &Path) -> Vec<String> {
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let timing = |h: &str| h.contains("time") || h == "steps_per_s";
     text.lines()
-        .map(|line| line.split(',').zip(&header).filter(|(_, h)| !timing(h)).map(|(v, _)| v).collect::<Vec<_>>().join(","))
+        .map(|line| {
+            line.split(',').zip(&header).filter(|(_, h)| !timing(h)).map(|(v, _)| v).collect::<Vec<_>>().join(",")
+        })
         .collect()
 }
 
@@ -120,7 +128,10 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let truncated = dir.join("truncated.safetensors");
     std::fs::write(&truncated, &before[..before.len() / 2]).unwrap();
     let err = checkpoint::load(&truncated).unwrap_err();
-    assert!(matches!(err, CheckpointError::Format { .. }) && err.to_string().contains("truncated.safetensors"), "{err}");
+    assert!(
+        matches!(err, CheckpointError::Format { .. }) && err.to_string().contains("truncated.safetensors"),
+        "{err}"
+    );
 
     // A policy of another layout (the pendulum's 4 observations) cannot start a flight run.
     let pendulum_dir = scratch_dir("pendulum-layout");
@@ -129,20 +140,30 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let ppo = PpoConfig { steps_per_env: 4, actor_hidden: vec![8], critic_hidden: vec![8], ..PpoConfig::default() };
     Trainer::new(envs, ppo, runner, String::new(), &pendulum_dir, Start::Fresh).unwrap().run(&mut |_, _| true).unwrap();
     let other = scratch_dir("other-layout");
-    let err = flight_trainer(&robot, &small_flight_config(2, 1), &other, Start::InitFrom(pendulum_dir.join("policy.safetensors")))
-        .err()
-        .unwrap();
+    let err = flight_trainer(
+        &robot,
+        &small_flight_config(2, 1),
+        &other,
+        Start::InitFrom(pendulum_dir.join("policy.safetensors")),
+    )
+    .err()
+    .unwrap();
     assert!(
         matches!(err, flapper_train::run::RunError::Train(TrainError::Checkpoint(CheckpointError::Layout { .. }))),
         "{err}"
     );
-    assert!(err.to_string().contains("4 observations and 1 actions") && err.to_string().contains("540 observations"), "{err}");
+    assert!(
+        err.to_string().contains("4 observations and 1 actions") && err.to_string().contains("540 observations"),
+        "{err}"
+    );
     assert!(!other.join("training.csv").exists(), "a refused run writes nothing");
 
     // --init-from a policy of the same layout starts a new run from its weights.
     let chained = scratch_dir("chained");
     let source = checkpoint::load(&dir.join("policy.safetensors")).unwrap();
-    let trainer = flight_trainer(&robot, &small_flight_config(2, 1), &chained, Start::InitFrom(dir.join("policy.safetensors"))).unwrap();
+    let trainer =
+        flight_trainer(&robot, &small_flight_config(2, 1), &chained, Start::InitFrom(dir.join("policy.safetensors")))
+            .unwrap();
     assert_eq!(trainer.ppo().policy, source.policy);
     assert_eq!(trainer.iteration(), 0);
     // ... and with `init_from_noise_std`, from that action noise instead of the source's.
@@ -150,7 +171,11 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let mut config = small_flight_config(2, 1);
     config.runner.init_from_noise_std = Some(0.25);
     let trainer = flight_trainer(&robot, &config, &renoised, Start::InitFrom(dir.join("policy.safetensors"))).unwrap();
-    assert!(trainer.ppo().policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() < 1e-6), "{:?}", trainer.ppo().policy.log_std);
+    assert!(
+        trainer.ppo().policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() < 1e-6),
+        "{:?}",
+        trainer.ppo().policy.log_std
+    );
     assert!(source.policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() > 1e-3), "the source's noise differs");
     assert_eq!(trainer.ppo().policy.actor, source.policy.actor, "the weights are the source's");
     config.runner.init_from_noise_std = Some(f32::NAN);
@@ -160,7 +185,10 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let err = flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).err().unwrap();
     assert!(matches!(err, flapper_train::run::RunError::Train(TrainError::Busy(_))), "{err}");
     drop(first);
-    assert!(flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).is_ok(), "released with its trainer");
+    assert!(
+        flight_trainer(&robot, &small_flight_config(4, 1), &dir, Start::Resume).is_ok(),
+        "released with its trainer"
+    );
 
     // Values no trained policy holds are refused by name, not flown.
     let bad_file = renoised.join("bad.safetensors");
@@ -197,7 +225,10 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     bytes[8..8 + header_len].copy_from_slice(renamed.as_bytes());
     std::fs::write(&bad_file, &bytes).unwrap();
     let err = checkpoint::load(&bad_file).unwrap_err();
-    assert!(err.to_string().contains("unknown variant `weight`") && err.to_string().contains("bad.safetensors"), "{err}");
+    assert!(
+        err.to_string().contains("unknown variant `weight`") && err.to_string().contains("bad.safetensors"),
+        "{err}"
+    );
     // Exporting a policy never overwrites: an existing target is refused and kept.
     let err = checkpoint::export_policy(&dir.join("policy.safetensors"), &bad_file).unwrap_err();
     assert!(err.to_string().contains("exists") && err.to_string().contains("bad.safetensors"), "{err}");
@@ -207,7 +238,10 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     let exported = renoised.join("exported.safetensors");
     let info = checkpoint::export_policy(&from, &exported).unwrap();
     let (saved, loaded) = (checkpoint::load(&from).unwrap(), checkpoint::load(&exported).unwrap());
-    assert_eq!((saved.info.kind, info.kind, loaded.info.kind), (CheckpointKind::Checkpoint, CheckpointKind::Policy, CheckpointKind::Policy));
+    assert_eq!(
+        (saved.info.kind, info.kind, loaded.info.kind),
+        (CheckpointKind::Checkpoint, CheckpointKind::Policy, CheckpointKind::Policy)
+    );
     assert!(loaded.optimizer.is_none() && loaded.info.rng.is_none() && loaded.environments.is_none());
     assert_eq!((loaded.policy.actor, loaded.info.iteration), (saved.policy.actor, saved.info.iteration));
     for d in [dir, pendulum_dir, other, chained, renoised] {
@@ -223,7 +257,10 @@ fn nothing_saved_is_lost_user_files_damaged_logs_and_failed_writes() {
     std::fs::create_dir_all(&users).unwrap();
     std::fs::write(users.join("config.toml"), "# my notes\n").unwrap();
     let err = flight_trainer(&robot, &small_flight_config(2, 1), &users, Start::Fresh).err().unwrap();
-    assert!(err.to_string().contains("already holds config.toml") && err.to_string().contains("new or empty folder"), "{err}");
+    assert!(
+        err.to_string().contains("already holds config.toml") && err.to_string().contains("new or empty folder"),
+        "{err}"
+    );
     assert_eq!(std::fs::read_to_string(users.join("config.toml")).unwrap(), "# my notes\n");
 
     // A damaged training log stops a resume and stays as it was.
@@ -261,7 +298,11 @@ fn nothing_saved_is_lost_user_files_damaged_logs_and_failed_writes() {
     let target = dir.join("occupied");
     std::fs::create_dir_all(target.join("inside")).unwrap();
     assert!(checkpoint::write_atomically(&target, b"new").is_err());
-    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp-")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
     assert!(target.join("inside").is_dir());
 }
@@ -271,8 +312,9 @@ fn evaluation_reads_the_same_task_from_a_policy_as_training_saved() {
     // flapper_eval::load_flight_policy reads only the saved config's [task]; it must be the task the
     // run trained on, for every shipped policy.
     for stage in 1..=4 {
-        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../policies/stage{stage}/policy.safetensors"));
-        let saved = flapper_ppo::checkpoint::load(&path).unwrap().info.config_toml;
+        let path =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../policies/stage{stage}/policy.safetensors"));
+        let saved = checkpoint::load(&path).unwrap().info.config_toml;
         let trained = TrainConfig::from_toml(&saved, "saved", None).unwrap().task;
         let (_, evaluated) = flapper_eval::load_flight_policy(&path).unwrap();
         assert_eq!(evaluated, trained, "stage {stage}");

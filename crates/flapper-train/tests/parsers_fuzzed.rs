@@ -5,12 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
+use flapper_eval::load_flight_policy;
 use flapper_ppo::Start;
 use flapper_ppo::checkpoint;
 use flapper_sim::RobotModel;
 use flapper_task::reference::csv_file::parse_reference_csv;
 use flapper_train::TrainConfig;
-use flapper_eval::load_flight_policy;
 use flapper_train::run::flight_trainer;
 use proptest::prelude::*;
 use proptest::sample::Index;

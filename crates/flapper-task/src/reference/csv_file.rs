@@ -41,7 +41,12 @@ pub fn reference_csv_text(points: &[Vec3], dt_s: f64) -> String {
     let round = |v: f64, decimals: usize| format!("{v:.decimals$}").parse::<f64>().expect("a formatted number parses");
     let mut writer = csv::Writer::from_writer(Vec::new());
     for (k, p) in points.iter().enumerate() {
-        let row = ReferenceRow { time_s: round(k as f64 * dt_s, 3), x_m: round(p.x, 4), y_m: round(p.y, 4), z_m: round(p.z, 4) };
+        let row = ReferenceRow {
+            time_s: round(k as f64 * dt_s, 3),
+            x_m: round(p.x, 4),
+            y_m: round(p.y, 4),
+            z_m: round(p.z, 4),
+        };
         writer.serialize(row).expect("numbers serialize");
     }
     String::from_utf8(writer.into_inner().expect("writing to memory")).expect("CSV of numbers is UTF-8")
@@ -56,9 +61,15 @@ pub fn load_reference_csv(path: &Path, dt_s: f64, lookahead_steps: usize) -> Res
 }
 
 /// As [`load_reference_csv`] from text; `origin` names it in errors.
-pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
+pub fn parse_reference_csv(
+    text: &str,
+    origin: &str,
+    dt_s: f64,
+    lookahead_steps: usize,
+) -> Result<Reference, ReferenceFileError> {
     let at_line = |line: usize, message: String| ReferenceFileError::Line { path: origin.to_owned(), line, message };
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(true).trim(csv::Trim::All).from_reader(text.as_bytes());
+    let mut reader =
+        csv::ReaderBuilder::new().has_headers(true).flexible(true).trim(csv::Trim::All).from_reader(text.as_bytes());
     // The first line is the header: one that is all numbers is a data row whose header is missing.
     if let Ok(header) = reader.headers()
         && header.len() >= 4
@@ -96,7 +107,9 @@ pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps:
             if speed > MAX_REFERENCE_SPEED_MPS {
                 return Err(at_line(
                     line,
-                    format!("speed {speed:.1} m/s since the previous point; no flying robot here follows more than {MAX_REFERENCE_SPEED_MPS} m/s"),
+                    format!(
+                        "speed {speed:.1} m/s since the previous point; no flying robot here follows more than {MAX_REFERENCE_SPEED_MPS} m/s"
+                    ),
                 ));
             }
         }
@@ -134,12 +147,19 @@ pub fn parse_reference_csv(text: &str, origin: &str, dt_s: f64, lookahead_steps:
 
 /// A reference given as positions already sampled every `dt_s` (rows of x, y, z in metres, e.g. a
 /// numpy array from Python), checked as a CSV's rows are; `origin` names it in errors.
-pub fn reference_from_points(points: &[[f64; 3]], origin: &str, dt_s: f64, lookahead_steps: usize) -> Result<Reference, ReferenceFileError> {
+pub fn reference_from_points(
+    points: &[[f64; 3]],
+    origin: &str,
+    dt_s: f64,
+    lookahead_steps: usize,
+) -> Result<Reference, ReferenceFileError> {
     let whole = |message: String| ReferenceFileError::Whole { path: origin.to_owned(), message };
     let mut checked: Vec<Vec3> = Vec::with_capacity(points.len());
     for (row, &[x, y, z]) in points.iter().enumerate() {
         if let Some(value) = [x, y, z].into_iter().find(|v| !v.is_finite() || v.abs() > MAX_REFERENCE_VALUE) {
-            return Err(whole(format!("row {row}: {value} is not a finite coordinate within +-{MAX_REFERENCE_VALUE} m")));
+            return Err(whole(format!(
+                "row {row}: {value} is not a finite coordinate within +-{MAX_REFERENCE_VALUE} m"
+            )));
         }
         let position = Vec3::new(x, y, z);
         if let Some(&previous) = checked.last() {
@@ -153,10 +173,17 @@ pub fn reference_from_points(points: &[[f64; 3]], origin: &str, dt_s: f64, looka
         checked.push(position);
     }
     if checked.len() < lookahead_steps + 1 {
-        return Err(whole(format!("has {} rows; at least {} are needed for the {lookahead_steps}-step lookahead", checked.len(), lookahead_steps + 1)));
+        return Err(whole(format!(
+            "has {} rows; at least {} are needed for the {lookahead_steps}-step lookahead",
+            checked.len(),
+            lookahead_steps + 1
+        )));
     }
     if (checked.len() - 1) as f64 * dt_s > MAX_REFERENCE_DURATION_S {
-        return Err(whole(format!("covers {:.0} s; at most {MAX_REFERENCE_DURATION_S} s are accepted", (checked.len() - 1) as f64 * dt_s)));
+        return Err(whole(format!(
+            "covers {:.0} s; at most {MAX_REFERENCE_DURATION_S} s are accepted",
+            (checked.len() - 1) as f64 * dt_s
+        )));
     }
     Ok(Reference::new(origin, dt_s, checked))
 }

@@ -93,7 +93,8 @@ pub fn build(name: &str, pieces: &[Piece], start: Vec3, yaw_rad: f64, dt_s: f64)
 pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s: f64, rng: &mut impl Rng) -> Reference {
     let mut pieces = Vec::new();
     let mut total = 0.0;
-    let uniform = |rng: &mut dyn rand::RngCore, [lo, hi]: [f64; 2]| if hi > lo { rng.random_range(lo..=hi) } else { lo };
+    let uniform =
+        |rng: &mut dyn rand::RngCore, [lo, hi]: [f64; 2]| if hi > lo { rng.random_range(lo..=hi) } else { lo };
     let cruise_speed = uniform(rng, config.forward_speed_mps);
     // Start with one held command so the launch is straight and level-ish.
     let mut first = true;
@@ -106,7 +107,12 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
             let side = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
             let angle = uniform(rng, config.sharp_turn_deg).to_radians() * side;
             let duration_s = uniform(rng, config.sharp_turn_duration_s);
-            Piece::Command { forward_speed_mps: speed, vertical_speed_mps: 0.0, yaw_rate_radps: angle / duration_s, duration_s }
+            Piece::Command {
+                forward_speed_mps: speed,
+                vertical_speed_mps: 0.0,
+                yaw_rate_radps: angle / duration_s,
+                duration_s,
+            }
         } else if is_loop {
             let kind = [LoopKind::BackFlip, LoopKind::Immelmann, LoopKind::RollOffTheBottom][rng.random_range(0..3)];
             let duration_s =

@@ -1,10 +1,10 @@
 //! Reference trajectories (paper III-B, IV-C): 3-D positions sampled at the control rate (50 Hz).
 //! The robot is rewarded for its distance to the current point and sees the next points ahead.
 //!
-//! - [`generator`]: pieces (commands of forward speed, vertical speed and yaw rate; vertical loops)
+//! - [`generator`] holds the pieces (commands of forward speed, vertical speed and yaw rate; vertical loops)
 //!   joined into a path, and the seeded procedural generator of the curriculum;
-//! - [`named`]: the references of the paper's results, by name;
-//! - [`csv_file`]: a user's own reference from a CSV of time, x, y, z, validated.
+//! - [`named`] holds the references of the paper's results, by name;
+//! - [`csv_file`] reads a user's own reference from a CSV of time, x, y, z, validated.
 
 pub mod csv_file;
 pub mod generator;
@@ -37,8 +37,9 @@ pub fn resolve(reference: &str, dt_s: f64, lookahead_steps: usize) -> Result<Ref
         let lookahead = lookahead_steps.max(crate::config::ObservationConfig::default().lookahead_steps);
         Ok(load_reference_csv(path, dt_s, lookahead)?)
     } else {
-        named(reference, NAMED_START_M, dt_s, lookahead_steps as f64 * dt_s)
-            .ok_or_else(|| ReferenceError::UnknownName { name: reference.to_owned(), known: reference_names().join(", ") })
+        named(reference, NAMED_START_M, dt_s, lookahead_steps as f64 * dt_s).ok_or_else(|| {
+            ReferenceError::UnknownName { name: reference.to_owned(), known: reference_names().join(", ") }
+        })
     }
 }
 

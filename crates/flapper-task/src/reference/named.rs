@@ -45,9 +45,19 @@ pub fn named_pieces(name: &str) -> Option<Vec<Piece>> {
         "longitudinal" => vec![cruise(6.0, v), vertical(0.8, 6.0), vertical(-0.83, 6.0), vertical(-1.5, 6.0)],
         "lateral" => {
             let fast = 5.3;
-            vec![cruise(3.0, fast), turn(90.0, 4.5, fast), cruise(3.0, fast), turn(-180.0, 3.0, fast), cruise(4.5, fast)]
+            vec![
+                cruise(3.0, fast),
+                turn(90.0, 4.5, fast),
+                cruise(3.0, fast),
+                turn(-180.0, 3.0, fast),
+                cruise(4.5, fast),
+            ]
         }
-        "loop" => vec![cruise(3.0, v), Piece::Loop { kind: LoopKind::BackFlip, speed_mps: v, duration_s: 3.0 }, cruise(3.0, v)],
+        "loop" => vec![
+            cruise(3.0, v),
+            Piece::Loop { kind: LoopKind::BackFlip, speed_mps: v, duration_s: 3.0 },
+            cruise(3.0, v),
+        ],
         "sharp-turn" => vec![cruise(3.0, v), turn(180.0, 1.2, v), cruise(3.0, v)],
         "roll-off-the-bottom" => vec![
             cruise(3.0, v),
@@ -55,7 +65,11 @@ pub fn named_pieces(name: &str) -> Option<Vec<Piece>> {
             cruise(3.0, v),
         ],
         "immelmann" => {
-            vec![cruise(3.0, v), Piece::Loop { kind: LoopKind::Immelmann, speed_mps: v, duration_s: 1.8 }, cruise(3.0, v)]
+            vec![
+                cruise(3.0, v),
+                Piece::Loop { kind: LoopKind::Immelmann, speed_mps: v, duration_s: 1.8 },
+                cruise(3.0, v),
+            ]
         }
         "aerobatic" => vec![
             cruise(3.0, v),
@@ -157,14 +171,30 @@ mod tests {
     fn piece_spans_tile_the_reference_in_order() {
         let spans = piece_spans("aerobatic").unwrap();
         let labels: Vec<&str> = spans.iter().map(|s| s.0).collect();
-        assert_eq!(labels, ["cruise", "loop", "cruise", "turn left", "cruise", "turn right", "cruise", "roll-off-the-bottom", "cruise"]);
+        assert_eq!(
+            labels,
+            [
+                "cruise",
+                "loop",
+                "cruise",
+                "turn left",
+                "cruise",
+                "turn right",
+                "cruise",
+                "roll-off-the-bottom",
+                "cruise"
+            ]
+        );
         assert_eq!(spans[0].1, 0.0);
         for pair in spans.windows(2) {
             assert_eq!(pair[0].2, pair[1].1);
         }
         let reference = named("aerobatic", Vec3::ZERO, 0.02, 0.0).unwrap();
         assert!((spans.last().unwrap().2 - reference.duration_s()).abs() < 0.02);
-        assert_eq!(piece_spans("longitudinal").unwrap().iter().map(|s| s.0).collect::<Vec<_>>(), ["cruise", "climb", "descent", "descent"]);
+        assert_eq!(
+            piece_spans("longitudinal").unwrap().iter().map(|s| s.0).collect::<Vec<_>>(),
+            ["cruise", "climb", "descent", "descent"]
+        );
         assert!(piece_spans("no-such-reference").is_none());
     }
 }
