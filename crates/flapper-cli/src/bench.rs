@@ -74,6 +74,14 @@ pub fn bench_command(
         n.threads
     );
     println!("  forward + backward + Adam  median {:.0} samples/s over {} updates", n.median_samples_per_s, n.repeats);
+    let latency = flapper_ppo::benchmark::time_policy_latency(observation_size, action_size, &ppo, 20_000);
+    println!(
+        "policy latency, one observation -> {action_size} actions on one thread, median over {} calls:",
+        latency.calls
+    );
+    println!("  CPU-independent path (evaluation, Python, on board)  {:.1} us", latency.exact_us);
+    println!("  the same, actor only                                 {:.1} us", latency.exact_actor_us);
+    println!("  training path (gemm, actor only)                     {:.1} us", latency.training_path_us);
     if train_iterations > 0 {
         let envs = if envs > 0 { envs } else { 256 };
         let t = flapper_train::benchmark::time_training(robot, envs, threads, train_iterations)?;

@@ -51,11 +51,12 @@ impl ActorCritic {
     }
 
     /// The deterministic action (the mean) for raw observations, normalizer frozen: what a trained
-    /// policy does at evaluation.
+    /// policy does at evaluation. The result is a function of the policy and the observations only,
+    /// the same bits on every CPU and for any number of rows ([`crate::exact_inference`]).
     pub fn act_deterministic(&self, observations: &[f32], scratch: &mut InferenceScratch, actions: &mut Vec<f32>) {
         let rows = observations.len() / self.observation_size();
         self.normalizer.normalize(observations, &mut scratch.normalized);
-        let mean = self.actor.forward(&scratch.normalized, rows, &mut scratch.workspace, 1);
+        let mean = self.actor.forward_exact(&scratch.normalized, rows, &mut scratch.workspace);
         actions.clear();
         actions.extend_from_slice(mean);
     }

@@ -1,15 +1,17 @@
 //! Throughput of the network update on the PPO workload, through the path training takes:
 //! [`Ppo::update`] over a full rollout of synthetic samples (minibatch gathering, the loss and its
 //! gradients with the actor's and the critic's halves side by side, gradient clipping, Adam and the
-//! adaptive learning rate). Used by `flapper bench`.
+//! adaptive learning rate). Also the latency of one policy call, the on-board controller's cost. Used by
+//! `flapper bench`.
 
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::actor_critic::ActorCritic;
+use crate::actor_critic::{ActorCritic, InferenceScratch};
 use crate::config::PpoConfig;
+use crate::mlp::Workspace;
 use crate::ppo::Ppo;
 
 #[derive(Debug, Clone)]
@@ -73,4 +75,53 @@ mod tests {
         assert_eq!((t.minibatch, t.threads, t.repeats), (16 * 24 / 4, 1, 3));
         assert!(t.median_samples_per_s.is_finite() && t.median_samples_per_s > 0.0, "{t:?}");
     }
+}
+
+/// Median time of one policy call on one thread: one observation to its actions.
+#[derive(Debug, Clone)]
+pub struct PolicyLatency {
+    /// Through `ActorCritic::act_deterministic` (normalizer and the CPU-independent forward pass): what
+    /// evaluation, the Python binding and an on-board controller run.
+    pub exact_us: f64,
+    /// The actor alone through the CPU-independent forward pass.
+    pub exact_actor_us: f64,
+    /// The actor alone through the training path (gemm, dispatched on the CPU's features), for comparison.
+    pub training_path_us: f64,
+    pub calls: usize,
+}
+
+/// Times `calls` single-observation calls of a policy with `config`'s networks (random weights and
+/// observations; the time does not depend on the values).
+pub fn time_policy_latency(
+    observation_size: usize,
+    action_size: usize,
+    config: &PpoConfig,
+    calls: usize,
+) -> PolicyLatency {
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let policy = ActorCritic::new(observation_size, action_size, config, &mut rng);
+    let observation: Vec<f32> = (0..observation_size).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let calls = calls.max(1);
+    let median_us = |mut call: Box<dyn FnMut() + '_>| {
+        call(); // warm-up: buffers allocated on the first call
+        let mut times: Vec<f64> = (0..calls)
+            .map(|_| {
+                let began = Instant::now();
+                call();
+                began.elapsed().as_secs_f64() * 1e6
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        times[times.len() / 2]
+    };
+    let (mut scratch, mut actions) = (InferenceScratch::default(), Vec::new());
+    let exact_us = median_us(Box::new(|| policy.act_deterministic(&observation, &mut scratch, &mut actions)));
+    let mut workspace = Workspace::default();
+    let exact_actor_us = median_us(Box::new(|| {
+        std::hint::black_box(policy.actor.forward_exact(&observation, 1, &mut workspace));
+    }));
+    let training_path_us = median_us(Box::new(|| {
+        std::hint::black_box(policy.actor.forward(&observation, 1, &mut workspace, 1));
+    }));
+    PolicyLatency { exact_us, exact_actor_us, training_path_us, calls }
 }

@@ -9,6 +9,7 @@ use rand::Rng;
 
 use serde::{Deserialize, Serialize};
 
+use crate::exact_inference::dense_layer;
 use crate::fast_math::{elu_in_place, tanh_in_place};
 use crate::matmul::{Product, matmul};
 
@@ -155,6 +156,28 @@ impl Mlp {
             }
             let how = Product { a_transposed: false, b_transposed: true, accumulate: true };
             matmul(out, previous, &self.params[weight.clone()], batch, fan_out, fan_in, how, threads);
+            if layer + 1 < layers {
+                self.activation.apply(out);
+            }
+        }
+        &ws.outputs[layers - 1]
+    }
+
+    /// Forward pass of `batch` rows through [`exact_inference`](crate::exact_inference): the same bits
+    /// on every CPU, for any batch (each row as if alone), one thread. Slower than [`Mlp::forward`] on
+    /// large batches; what flying a trained policy uses.
+    pub fn forward_exact<'w>(&self, input: &[f32], batch: usize, ws: &'w mut Workspace) -> &'w [f32] {
+        assert_eq!(input.len(), batch * self.input_size(), "input is not {batch} x {}", self.input_size());
+        let layers = self.sizes.len() - 1;
+        ws.batch = batch;
+        ws.outputs.resize_with(layers, Vec::new);
+        for layer in 0..layers {
+            let (weight, bias) = (&self.tensors[2 * layer].range, &self.tensors[2 * layer + 1].range);
+            let (before, rest) = ws.outputs.split_at_mut(layer);
+            let previous: &[f32] = if layer == 0 { input } else { &before[layer - 1] };
+            let out = &mut rest[0];
+            out.resize(batch * self.sizes[layer + 1], 0.0);
+            dense_layer(out, previous, &self.params[weight.clone()], &self.params[bias.clone()], batch);
             if layer + 1 < layers {
                 self.activation.apply(out);
             }

@@ -305,9 +305,8 @@ impl Policy {
         &self.task_toml
     }
 
-    /// Mean actions [N, 5] (float32) for raw observations [N, obs] (float32, finite). The matrix
-    /// products may round differently in the last bits for another N; `flapper eval` acts on one
-    /// row at a time, so do the same to reproduce it bit for bit.
+    /// Mean actions [N, 5] (float32) for raw observations [N, obs] (float32, finite): the same bits
+    /// as `flapper eval` computes, on any CPU, for a batch or one row at a time.
     fn act<'py>(
         &self,
         py: Python<'py>,

@@ -1,6 +1,7 @@
 """A shipped policy flown through the binding reproduces `flapper eval`."""
 
 import csv
+import json
 
 import numpy as np
 
@@ -16,9 +17,7 @@ def fly(policy_path, reference, episodes, seed):
     squared, steps = np.zeros(episodes), np.zeros(episodes, int)
     outcome = [None] * episodes
     while any(o is None for o in outcome):
-        # One row at a time, as flapper eval: a batched product may round differently in the last
-        # bit, and a flight amplifies that.
-        actions = np.concatenate([policy.act(obs[k : k + 1]) for k in range(episodes)])
+        actions = policy.act(obs)  # the whole batch: the same bits as one row at a time
         obs, _, terminated, truncated, info = env.step(actions)
         flying = np.array([o is None for o in outcome])
         error = info["position_error_m"].astype(np.float64)
@@ -31,11 +30,11 @@ def fly(policy_path, reference, episodes, seed):
     return completed, rms
 
 
-def test_shipped_stage_3_policy_reproduces_flapper_eval(root, tmp_path):
-    policy, reference, episodes, seed = root / "policies/stage3/policy.safetensors", "lateral", 4, 11
+def test_shipped_policy_reproduces_flapper_eval_bit_for_bit(root, tmp_path):
+    policy, reference, episodes, seed = root / "policies/stage4/policy.safetensors", "lateral", 4, 11
     completed, rms = fly(str(policy), reference, episodes, seed)
     cargo_run("flapper-cli", [], ["eval", "--policy", policy, "--reference", reference, "--episodes", episodes,
-                                  "--seed", seed, "--no-baseline", "--out", tmp_path])
+                                  "--seed", seed, "--no-baseline", "--observations", "--out", tmp_path])
     errors = {}
     with open(tmp_path / "policy" / "steps.csv") as f:
         for row in csv.DictReader(f):
@@ -45,6 +44,41 @@ def test_shipped_stage_3_policy_reproduces_flapper_eval(root, tmp_path):
     # The binding reports errors in float32; flapper eval writes them rounded in its CSV.
     np.testing.assert_allclose(rms, eval_rms, rtol=1e-3)
     assert np.all(rms < 1.0)
+
+    # Episode 0 step by step: the observations the binding's environment gives and the actions its
+    # policy takes are exactly those `flapper eval` recorded (its CSV holds round-trip decimals).
+    with open(tmp_path / "policy" / "observations.csv") as f:
+        recorded = np.array([[np.float32(v) for v in row[1:]] for row in list(csv.reader(f))[1:]])
+    size = flapper.Policy.load(str(policy)).observation_size
+    eval_obs, eval_actions = recorded[:, :size], recorded[:, size:]
+    env = flapper.FlightVectorEnv(1, policy=str(policy), reference=reference, evaluation=True, seed=seed)
+    obs, _ = env.reset(seed=seed)
+    loaded = flapper.Policy.load(str(policy))
+    for step in range(len(recorded)):
+        actions = loaded.act(obs)
+        assert np.array_equal(obs[0].view(np.uint32), eval_obs[step].view(np.uint32)), f"observation at step {step}"
+        assert np.array_equal(actions[0].view(np.uint32), eval_actions[step].view(np.uint32)), f"action at step {step}"
+        obs, _, terminated, truncated, _ = env.step(actions)
+        if terminated[0] or truncated[0]:
+            break
+
+
+def test_golden_actions_bit_for_bit(root):
+    """The golden set of crates/flapper-eval/tests/data (see its test): the binding gives the same bits."""
+    data = (root / "crates/flapper-eval/tests/data/inference_golden.safetensors").read_bytes()
+    header_size = int.from_bytes(data[:8], "little")
+    header = json.loads(data[8 : 8 + header_size])
+    body = data[8 + header_size :]
+
+    def tensor(name):
+        start, end = header[name]["data_offsets"]
+        return np.frombuffer(body[start:end], dtype="<f4").reshape(header[name]["shape"])
+
+    policy = flapper.Policy.load(str(root / header["__metadata__"]["policy"]))
+    observations, golden = tensor("observations"), tensor("actions")
+    assert np.array_equal(policy.act(observations).view(np.uint32), golden.view(np.uint32))
+    alone = np.concatenate([policy.act(observations[k : k + 1]) for k in range(0, len(observations), 7)])
+    assert np.array_equal(alone.view(np.uint32), golden[::7].view(np.uint32))
 
 
 def test_policy_mean_action(root):
@@ -56,5 +90,4 @@ def test_policy_mean_action(root):
     actions = policy.act(obs)
     assert actions.shape == (3, 5) and actions.dtype == np.float32
     assert np.array_equal(actions, policy.act(obs)), "the mean action is deterministic"
-    # Rows are independent; a different batch size may round differently in the last bits.
-    np.testing.assert_allclose(actions[1:2], policy.act(obs[1:2]), rtol=0, atol=1e-5)
+    assert np.array_equal(actions[1:2], policy.act(obs[1:2])), "a row alone gives the bits it gives in a batch"
