@@ -4,7 +4,8 @@
 #   make test    run the whole test suite (what CI runs): formatting and lint checks, Rust tests, then the Python binding's
 #   make python  build the Python package `flapper` (crates/flapper-py) into the virtual environment
 #                .venv (made with $(PYTHON) if missing); `. .venv/bin/activate` then `import flapper`
-#   make train   train stages 1 to 4 from scratch into runs/stage1..4 (see README, "Learned flight")
+#   make train   train the final controller from scratch: the whole curriculum (configs/curriculum.toml)
+#                into runs/curriculum; run it again to continue after an interruption
 #   make bench   simulator, environment, network and end-to-end training throughput
 #   make report-deps  install (Debian/Ubuntu, needs root or sudo) what rendering, video and the browser check
 #                use: Mesa's EGL software renderer, ffmpeg, chromium
@@ -47,13 +48,7 @@ python-bench: python
 	$(VENV)/bin/python crates/flapper-py/benchmarks/steps_per_second.py
 
 train: mujoco
-	$(FLAPPER) train --config configs/stage1.toml --out runs/stage1
-	$(FLAPPER) train --config configs/stage2.toml --init-from runs/stage1/policy.safetensors --out runs/stage2
-	$(FLAPPER) train --config configs/stage3.toml --init-from runs/stage2/policy.safetensors --out runs/stage3
-	$(FLAPPER) train --config configs/stage4.toml --init-from runs/stage3/policy.safetensors --out runs/stage4a
-	$(FLAPPER) train --config configs/stage4-slow.toml --init-from runs/stage4a/checkpoints/iter_001900.safetensors --out runs/stage4b
-	$(FLAPPER) train --config configs/stage4-wide.toml --init-from runs/stage4b/policy.safetensors --out runs/stage4c
-	$(FLAPPER) train --config configs/stage4-lift.toml --init-from runs/stage4c/checkpoints/iter_000500.safetensors --out runs/stage4
+	$(FLAPPER) curriculum --out runs/curriculum
 
 evaluate: mujoco
 	@for r in $(REFERENCES); do \

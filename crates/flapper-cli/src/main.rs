@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 use flapper_sim::RobotModel;
 
 mod bench;
+mod curriculum;
 mod eval;
 mod export_policy;
 mod fly;
@@ -66,6 +67,10 @@ enum Command {
         #[arg(long, default_value = "run/reference")]
         out: PathBuf,
     },
+    /// Train the final controller from scratch: every curriculum stage in turn, each checkpoint judged
+    /// on a validation set, the best handed to the next stage, gates that stop a run which does not
+    /// learn. Run again on the same --out to continue after an interruption.
+    Curriculum(curriculum::CurriculumArgs),
     /// Train a flight controller with PPO: a progress bar, one CSV row per iteration, learning curves,
     /// checkpoints every few iterations, and the final policy, all in --out.
     Train {
@@ -324,6 +329,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench { blocks, steps, envs, threads, train_iterations } => {
             bench::bench_command(&robot, blocks, steps, envs, threads, train_iterations)
         }
+        Command::Curriculum(args) => curriculum::run(&robot, args),
         Command::Train { config, stage, out, resume, init_from, iterations, seed, envs } => {
             let overrides = train::Overrides { iterations, seed, envs };
             train::train_command(&robot, config.as_deref(), stage, &out, resume, init_from, overrides)

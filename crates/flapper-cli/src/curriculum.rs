@@ -1,0 +1,103 @@
+//! `flapper curriculum`: train the final controller from scratch, every stage in turn, unattended; run
+//! again on the same folder to continue after an interruption.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use flapper_curriculum::run::describe_gate;
+use flapper_curriculum::{CurriculumConfig, CurriculumRequest, Progress, run_curriculum};
+use flapper_sim::RobotModel;
+
+/// The shipped curriculum, relative to the repository (the default `--config`).
+const SHIPPED_CONFIG: &str = "configs/curriculum.toml";
+
+#[derive(clap::Args)]
+pub struct CurriculumArgs {
+    /// Run folder: one subfolder per stage, summary.json, curriculum.svg and the final policy.safetensors.
+    /// Give the same folder again to continue an interrupted run.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// The curriculum (TOML: seed, shared [runner] and [ppo], one [[stages]] entry per stage).
+    #[arg(long, value_name = "TOML", default_value = SHIPPED_CONFIG)]
+    config: PathBuf,
+    /// Replaces the config's seed (stage k trains with seed * 100 + k).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Stop after this stage (1-based); run again without it to go on.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..=100))]
+    until_stage: Option<u64>,
+}
+
+pub fn run(robot: &RobotModel, args: CurriculumArgs) -> Result<()> {
+    let mut config = CurriculumConfig::load(&args.config)?;
+    if let Some(seed) = args.seed {
+        config.seed = seed;
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let request =
+        CurriculumRequest { dir: &args.out, config, until_stage: args.until_stage.map(|k| k as usize), command };
+    let outcomes = run_curriculum(robot, request, &mut report_progress)
+        .with_context(|| format!("curriculum in '{}'", args.out.display()))?;
+    let steps: u64 = outcomes.iter().map(|o| o.env_steps).sum();
+    let seconds: f64 = outcomes.iter().map(|o| o.wall_time_s).sum();
+    println!("done: {} stages, {:.2} M environment steps, {:.0} s", outcomes.len(), steps as f64 / 1e6, seconds);
+    for file in ["policy.safetensors", "summary.json", "curriculum.svg"] {
+        println!("wrote {}", args.out.join(file).display());
+    }
+    Ok(())
+}
+
+fn report_progress(event: Progress) {
+    match event {
+        Progress::StageStarts { stage, of, config, resumed_at } => {
+            let from = if resumed_at > 0 { format!(", resuming at iteration {resumed_at}") } else { String::new() };
+            println!(
+                "stage {stage}/{of} ({}): up to {} iterations, validated every {}; gate: {}{from}",
+                config.name,
+                config.max_iterations,
+                config.validate_every,
+                describe_gate(&config.gate)
+            );
+        }
+        Progress::Iteration { stage, log } => {
+            if log.iteration.is_multiple_of(10) {
+                eprintln!(
+                    "  stage {stage} it {}  {:.2}M steps  {:.0} steps/s  return {:.1}  std {:.2}  lr {:.1e}",
+                    log.iteration,
+                    log.env_steps as f64 / 1e6,
+                    log.steps_per_s,
+                    log.mean_return,
+                    log.update.action_std,
+                    log.update.learning_rate
+                );
+            }
+        }
+        Progress::Validated { stage, row, gate_met } => {
+            let per: Vec<String> = row
+                .score
+                .references
+                .iter()
+                .map(|r| format!("{} {}/{} {:.2} m", r.name, r.completed, r.episodes, r.mean_rms_m))
+                .collect();
+            println!(
+                "  stage {stage} validation at iteration {}: {:.1}% completed, RMS {:.3} m ({}){}",
+                row.iteration,
+                row.score.completed_percent,
+                row.score.mean_rms_m,
+                per.join(", "),
+                if gate_met { "; gate met" } else { "" }
+            );
+        }
+        Progress::StageDone { outcome } => println!(
+            "stage {} ({}) done: {} iterations, {:.2} M steps, {:.0} s; hands over iteration {} ({:.1}% completed, RMS {:.3} m)",
+            outcome.stage,
+            outcome.name,
+            outcome.iterations,
+            outcome.env_steps as f64 / 1e6,
+            outcome.wall_time_s,
+            outcome.selected_iteration,
+            outcome.validation_score,
+            outcome.validation_rms_m
+        ),
+    }
+}

@@ -1,0 +1,250 @@
+//! The curriculum in one TOML file (`configs/curriculum.toml`): a seed, the `[runner]` and `[ppo]`
+//! settings every stage starts from, and one `[[stages]]` entry per stage with its task, budget,
+//! validation set and gate. Each stage becomes an ordinary `flapper train` config ([`TrainConfig`]), so
+//! every key a training config takes is available here with the same meaning and the same checks.
+
+use std::path::Path;
+
+use flapper_train::{TrainConfig, TrainConfigError};
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, thiserror::Error)]
+pub enum CurriculumConfigError {
+    #[error("cannot read curriculum config '{path}': {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("curriculum config '{origin}': {message}")]
+    Parse { origin: String, message: String },
+    #[error("curriculum config '{origin}', stage {stage}: {source}")]
+    Stage { origin: String, stage: usize, source: TrainConfigError },
+}
+
+/// The whole file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurriculumConfig {
+    /// Stage k trains with seed `seed * 100 + k` and validates with seed `seed * 100 + k + 50`, so
+    /// validation never flies a start that training drew.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// `[runner]` keys shared by every stage (a stage's own `[stages.runner]` overrides them).
+    #[serde(default)]
+    pub runner: toml::Table,
+    /// `[ppo]` keys shared by every stage.
+    #[serde(default)]
+    pub ppo: toml::Table,
+    pub stages: Vec<StageConfig>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// One stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageConfig {
+    /// What the stage teaches, for people ("cruise", "climb and dive", ...).
+    pub name: String,
+    /// The budget: PPO iterations at most (each collects envs x steps_per_env environment steps).
+    pub max_iterations: usize,
+    /// Fly the validation set every this many iterations (each is a checkpoint too).
+    pub validate_every: usize,
+    /// The action noise (standard deviation) this stage starts from, replacing the previous stage's.
+    /// A sharp policy (small std) pins the adaptive learning rate at its floor: the KL of a Gaussian
+    /// grows as (change of mean / std)^2. Ignored for the first stage (`[ppo] init_noise_std`).
+    pub start_noise_std: Option<f32>,
+    pub validation: ValidationConfig,
+    pub gate: Gate,
+    /// `[stages.runner]`, `[stages.ppo]`, `[stages.task]`: as in a `flapper train` config.
+    #[serde(default)]
+    pub runner: toml::Table,
+    #[serde(default)]
+    pub ppo: toml::Table,
+    #[serde(default)]
+    pub task: toml::Table,
+}
+
+/// The references a stage's checkpoints are judged on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidationConfig {
+    /// Named references (`flapper reference --help` lists them) or CSV files.
+    #[serde(default)]
+    pub references: Vec<String>,
+    /// Procedural references drawn from the stage's own `[task.reference]` ranges with the validation seed.
+    #[serde(default)]
+    pub procedural: usize,
+    /// Randomized starts per reference.
+    pub episodes: usize,
+}
+
+/// When a stage has done its job: checked at every validation from `min_iterations` on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gate {
+    /// Every validation reference completed in at least this share of its episodes (percent).
+    pub completed_percent: f64,
+    /// The mean RMS tracking error over all validation episodes at most this (m).
+    pub max_rms_m: Option<f64>,
+    /// The gate is not looked at before this iteration (a stage that just met it may still improve).
+    #[serde(default)]
+    pub min_iterations: usize,
+}
+
+impl CurriculumConfig {
+    pub fn load(path: &Path) -> Result<Self, CurriculumConfigError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| CurriculumConfigError::Read { path: path.display().to_string(), source })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks the whole curriculum: every stage's training config is built once here, so
+    /// a mistake in stage 4 is refused before stage 1 trains.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, CurriculumConfigError> {
+        let parse = |message: String| CurriculumConfigError::Parse { origin: origin.to_owned(), message };
+        let config: Self = toml::from_str(text).map_err(|e: toml::de::Error| parse(e.to_string()))?;
+        if config.stages.is_empty() {
+            return Err(parse("needs at least one [[stages]] entry".into()));
+        }
+        for (index, stage) in config.stages.iter().enumerate() {
+            let number = index + 1;
+            let bad = |message: String| parse(format!("stage {number} ('{}'): {message}", stage.name));
+            if stage.max_iterations == 0 || stage.validate_every == 0 || stage.validate_every > stage.max_iterations {
+                return Err(bad(format!(
+                    "max_iterations ({}) and validate_every ({}) must be at least 1, validate_every no more than max_iterations",
+                    stage.max_iterations, stage.validate_every
+                )));
+            }
+            let v = &stage.validation;
+            if v.episodes == 0 || v.references.len() + v.procedural == 0 {
+                return Err(bad("validation needs at least one reference (or procedural > 0) and episodes > 0".into()));
+            }
+            let g = &stage.gate;
+            if !(0.0..=100.0).contains(&g.completed_percent) || g.max_rms_m.is_some_and(|r| !(r > 0.0 && r.is_finite()))
+            {
+                return Err(bad(format!(
+                    "gate.completed_percent must be in [0, 100] (got {}) and gate.max_rms_m positive (got {:?})",
+                    g.completed_percent, g.max_rms_m
+                )));
+            }
+            if let Some(std) = stage.start_noise_std
+                && !(std > 0.0 && std <= 10.0)
+            {
+                return Err(bad(format!("start_noise_std must be in (0, 10], got {std}")));
+            }
+            config.stage_train_config(number).map_err(|source| CurriculumConfigError::Stage {
+                origin: origin.to_owned(),
+                stage: number,
+                source,
+            })?;
+        }
+        Ok(config)
+    }
+
+    /// Stage `number`'s (1-based) `flapper train` config: the shared `[runner]` and `[ppo]`, then the
+    /// stage's own tables over them; the seed, budget and checkpoint interval from the curriculum.
+    pub fn stage_train_config(&self, number: usize) -> Result<TrainConfig, TrainConfigError> {
+        let stage = &self.stages[number - 1];
+        let mut runner = self.runner.clone();
+        runner.extend(stage.runner.clone());
+        runner.insert("seed".into(), toml::Value::Integer(self.stage_seed(number) as i64));
+        runner.insert("iterations".into(), toml::Value::Integer(stage.max_iterations as i64));
+        runner.insert("checkpoint_every".into(), toml::Value::Integer(stage.validate_every as i64));
+        if number > 1
+            && let Some(std) = stage.start_noise_std
+        {
+            runner.insert("init_from_noise_std".into(), toml::Value::Float(std as f64));
+        }
+        let mut ppo = self.ppo.clone();
+        ppo.extend(stage.ppo.clone());
+        let mut table = toml::Table::new();
+        table.insert("runner".into(), toml::Value::Table(runner));
+        table.insert("ppo".into(), toml::Value::Table(ppo));
+        table.insert("task".into(), toml::Value::Table(stage.task.clone()));
+        let text = toml::to_string(&table).expect("a TOML table serializes");
+        TrainConfig::from_toml(&text, &format!("[[stages]] {number} ('{}')", stage.name), None)
+    }
+
+    pub fn stage_seed(&self, number: usize) -> u64 {
+        self.seed * 100 + number as u64
+    }
+
+    pub fn validation_seed(&self, number: usize) -> u64 {
+        self.stage_seed(number) + 50
+    }
+
+    /// The file as it will be saved with the run (every stage in full).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("the curriculum serializes")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub const TINY: &str = r#"
+seed = 3
+[runner]
+envs = 4
+threads = 1
+[ppo]
+steps_per_env = 8
+[[stages]]
+name = "cruise"
+max_iterations = 4
+validate_every = 2
+validation = { references = ["cruise"], episodes = 1 }
+gate = { completed_percent = 0 }
+task = { stage = 1 }
+[[stages]]
+name = "climb and dive"
+max_iterations = 2
+validate_every = 1
+start_noise_std = 0.4
+validation = { references = ["longitudinal"], procedural = 1, episodes = 1 }
+gate = { completed_percent = 0, max_rms_m = 100.0 }
+runner = { envs = 2 }
+task = { stage = 2 }
+"#;
+
+    #[test]
+    fn stages_become_training_configs_with_the_shared_settings_and_their_own() {
+        let c = CurriculumConfig::from_toml(TINY, "tiny.toml").unwrap();
+        let first = c.stage_train_config(1).unwrap();
+        let second = c.stage_train_config(2).unwrap();
+        assert_eq!((first.runner.envs, second.runner.envs), (4, 2), "a stage's [runner] overrides the shared one");
+        assert_eq!((first.ppo.steps_per_env, second.ppo.steps_per_env), (8, 8));
+        assert_eq!((first.runner.seed, second.runner.seed), (301, 302));
+        assert_eq!((first.runner.iterations, first.runner.checkpoint_every), (4, 2));
+        assert_eq!((first.task.stage, second.task.stage), (1, 2));
+        assert_eq!(first.runner.init_from_noise_std, None);
+        assert_eq!(second.runner.init_from_noise_std, Some(0.4));
+        assert_ne!(c.validation_seed(1), first.runner.seed);
+        let again = CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap();
+        assert_eq!(again, c, "the saved curriculum reads back as it was");
+    }
+
+    #[test]
+    fn mistakes_anywhere_are_refused_before_training_naming_the_stage() {
+        let err = |from: &str, to: &str| {
+            let text = TINY.replacen(from, to, 1);
+            assert_ne!(text, TINY, "the test edits the config");
+            CurriculumConfig::from_toml(&text, "bad.toml").unwrap_err().to_string()
+        };
+        let e = err("task = { stage = 2 }", "task = { stage = 2, reward = { energy_wieght = 1 } }");
+        assert!(e.contains("bad.toml") && e.contains("stage 2") && e.contains("energy_wieght"), "{e}");
+        let e = err("validate_every = 1", "validate_every = 5");
+        assert!(e.contains("stage 2") && e.contains("validate_every"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 120 }");
+        assert!(e.contains("completed_percent") && e.contains("120"), "{e}");
+        let e = err("episodes = 1 }", "episodes = 0 }");
+        assert!(e.contains("episodes"), "{e}");
+        let e = err("start_noise_std = 0.4", "start_noise_std = -1");
+        assert!(e.contains("start_noise_std"), "{e}");
+        let e = err("[ppo]\nsteps_per_env = 8", "[ppo]\nsteps_per_env = 0");
+        assert!(e.contains("ppo.steps_per_env"), "{e}");
+        let e = err("seed = 3", "seed = 3\nstagez = 1");
+        assert!(e.contains("stagez"), "{e}");
+    }
+}

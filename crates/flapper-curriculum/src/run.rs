@@ -1,0 +1,323 @@
+//! Running the curriculum into one folder, stage after stage, and continuing it after any interruption.
+//!
+//! Folder: `curriculum.toml` (the curriculum as run), `stageK/` (an ordinary training run, plus its
+//! `selection.csv` and, once the stage is done, `selected.json`), `summary.json`, `curriculum.svg` and,
+//! at the end, `policy.safetensors` (the last stage's selected checkpoint as a policy file).
+//!
+//! A stage trains until its gate is met at a validation (from `min_iterations` on) or its budget is
+//! spent; it hands over its best validated checkpoint (never simply the last), and the next stage starts
+//! from that checkpoint with its own action noise. Running again on the same folder picks up where it
+//! stopped: finished stages are read back, an interrupted one resumes from its last checkpoint (exactly,
+//! as `flapper train --resume` does), a checkpoint saved but not yet judged is judged first.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_ppo::runner::{checkpoint_dir, latest_checkpoint};
+use flapper_ppo::{IterationLog, Start};
+use flapper_sim::RobotModel;
+use flapper_train::run::{RunError, flight_trainer, saved_config};
+
+use crate::config::{CurriculumConfig, StageConfig};
+use crate::figure::write_curriculum_figure;
+use crate::selection::{Selection, SelectionError, StageOutcome, Validated};
+use crate::summary::Summary;
+use crate::validation::{ValidationError, ValidationSet};
+
+#[derive(Debug, thiserror::Error)]
+pub enum CurriculumError {
+    #[error("'{0}' holds files that are not a curriculum run (no curriculum.toml); choose a new or empty folder")]
+    NotACurriculum(PathBuf),
+    #[error(
+        "'{dir}' holds a curriculum started with other settings ({what} differs from its curriculum.toml); continue it with the same settings or choose another folder"
+    )]
+    OtherSettings { dir: PathBuf, what: &'static str },
+    #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
+    Busy(PathBuf),
+    #[error(
+        "stage {stage} ('{name}') missed its gate ({gate}) within {iterations} iterations; its best checkpoint, iteration {best_iteration}, completed {best_completed:.1}% with a mean RMS error of {best_rms_m:.3} m. Its runs are in '{dir}'"
+    )]
+    GateMissed {
+        stage: usize,
+        name: String,
+        gate: String,
+        iterations: usize,
+        best_iteration: usize,
+        best_completed: f64,
+        best_rms_m: f64,
+        dir: PathBuf,
+    },
+    #[error(transparent)]
+    Run(#[from] RunError),
+    #[error(transparent)]
+    Train(#[from] flapper_ppo::TrainError),
+    #[error(transparent)]
+    Validation(#[from] ValidationError),
+    #[error(transparent)]
+    Selection(#[from] SelectionError),
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    #[error("'{path}': {message}")]
+    File { path: PathBuf, message: String },
+}
+
+/// What the caller chose.
+pub struct CurriculumRequest<'a> {
+    pub dir: &'a Path,
+    pub config: CurriculumConfig,
+    /// Stop after this stage (all stages when `None`).
+    pub until_stage: Option<usize>,
+    /// The command line, recorded in `summary.json`.
+    pub command: String,
+}
+
+/// Progress the caller may show: a stage starting, each iteration, each validation.
+pub enum Progress<'a> {
+    StageStarts { stage: usize, of: usize, config: &'a StageConfig, resumed_at: usize },
+    Iteration { stage: usize, log: &'a IterationLog },
+    Validated { stage: usize, row: &'a Validated, gate_met: bool },
+    StageDone { outcome: &'a StageOutcome },
+}
+
+/// Runs (or continues) the curriculum; returns the stages done.
+pub fn run_curriculum(
+    robot: &RobotModel,
+    request: CurriculumRequest,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Vec<StageOutcome>, CurriculumError> {
+    let dir = request.dir;
+    let config = open_folder(dir, &request.config)?;
+    let _lock = lock(dir)?;
+    let last = request.until_stage.unwrap_or(config.stages.len()).clamp(1, config.stages.len());
+    let mut outcomes: Vec<StageOutcome> = Vec::new();
+    for number in 1..=last {
+        let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
+        let outcome = run_stage(robot, &config, dir, number, previous, progress)?;
+        progress(Progress::StageDone { outcome: &outcome });
+        outcomes.push(outcome);
+        Summary::new(&config, &request.command, &outcomes).write(&dir.join("summary.json"))?;
+        let stage_dirs: Vec<PathBuf> = (1..=number).map(|k| stage_dir(dir, k)).collect();
+        write_curriculum_figure(&stage_dirs, &config, &dir.join("curriculum.svg"))
+            .map_err(|message| CurriculumError::File { path: dir.join("curriculum.svg"), message })?;
+    }
+    let policy = dir.join("policy.safetensors");
+    if let Some(outcome) = outcomes.last() {
+        if policy.exists() {
+            std::fs::remove_file(&policy)
+                .map_err(|e| CurriculumError::File { path: policy.clone(), message: e.to_string() })?;
+        }
+        checkpoint::export_policy(&dir.join(&outcome.checkpoint), &policy)?;
+    }
+    Ok(outcomes)
+}
+
+pub fn stage_dir(dir: &Path, number: usize) -> PathBuf {
+    dir.join(format!("stage{number}"))
+}
+
+/// Saves the curriculum in a new folder, or checks that a folder's saved one is the same.
+fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig, CurriculumError> {
+    let file = |path: &Path, e: &dyn std::fmt::Display| CurriculumError::File {
+        path: path.to_owned(),
+        message: e.to_string(),
+    };
+    let saved_path = dir.join("curriculum.toml");
+    if saved_path.exists() {
+        let saved = CurriculumConfig::load(&saved_path).map_err(|e| file(&saved_path, &e))?;
+        if saved.seed != config.seed {
+            return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "the seed" });
+        }
+        if saved != *config {
+            return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "the curriculum config" });
+        }
+        return Ok(saved);
+    }
+    if dir.read_dir().is_ok_and(|mut entries| entries.next().is_some()) {
+        return Err(CurriculumError::NotACurriculum(dir.to_owned()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| file(dir, &e))?;
+    checkpoint::write_atomically(&saved_path, config.to_toml().as_bytes())?;
+    Ok(config.clone())
+}
+
+/// The folder's lock (`.lock`, released by the OS when the process ends).
+fn lock(dir: &Path) -> Result<std::fs::File, CurriculumError> {
+    let path = dir.join(".lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| CurriculumError::File { path: path.clone(), message: e.to_string() })?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(CurriculumError::Busy(dir.to_owned())),
+        Err(std::fs::TryLockError::Error(e)) => Err(CurriculumError::File { path, message: e.to_string() }),
+    }
+}
+
+/// One stage: read back if done, else train (fresh, from the previous stage, or resumed), judge, select.
+fn run_stage(
+    robot: &RobotModel,
+    config: &CurriculumConfig,
+    dir: &Path,
+    number: usize,
+    previous: Option<PathBuf>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<StageOutcome, CurriculumError> {
+    let here = stage_dir(dir, number);
+    let outcome_path = here.join("selected.json");
+    if outcome_path.exists() {
+        let text = std::fs::read_to_string(&outcome_path)
+            .map_err(|e| CurriculumError::File { path: outcome_path.clone(), message: e.to_string() })?;
+        return serde_json::from_str(&text)
+            .map_err(|e| CurriculumError::File { path: outcome_path.clone(), message: e.to_string() });
+    }
+    let stage = &config.stages[number - 1];
+    let train_config = config.stage_train_config(number).map_err(RunError::from)?;
+    let set =
+        ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?;
+    let names = set.names();
+    let selection_path = here.join("selection.csv");
+    let mut selection = Selection::read(&selection_path, &names)?;
+
+    let resumed_at =
+        latest_checkpoint(&here).map(|path| checkpoint::load(&path).map(|c| c.info.iteration)).transpose()?;
+    // Done training: the final policy is written, or the budget is spent, or the gate was met before
+    // the last checkpoint (the run stops one iteration after the validation that meets it).
+    let finished = here.join("policy.safetensors").exists()
+        || resumed_at.is_some_and(|at| at >= stage.max_iterations || selection.gate_met_before(&stage.gate, at));
+    // Judge what is saved but not judged (an interruption between a checkpoint and its validation);
+    // rows after the last checkpoint belong to iterations the resumed run will do again.
+    selection.truncate_after(resumed_at.unwrap_or(0));
+    for (iteration, path) in saved_checkpoints(&here) {
+        if !selection.has(iteration) {
+            let began = Instant::now();
+            let score = set.judge(robot, &path)?;
+            let env_steps = checkpoint::load(&path)?.info.env_steps;
+            let row = Validated { iteration, env_steps, validation_s: began.elapsed().as_secs_f64(), score };
+            selection.rows.push(row);
+        }
+    }
+    selection.rows.sort_by_key(|r| r.iteration);
+    std::fs::create_dir_all(&here).map_err(|e| CurriculumError::File { path: here.clone(), message: e.to_string() })?;
+    selection.write(&selection_path, &names)?;
+
+    if !finished {
+        progress(Progress::StageStarts {
+            stage: number,
+            of: config.stages.len(),
+            config: stage,
+            resumed_at: resumed_at.unwrap_or(0),
+        });
+        let start = match (resumed_at, &previous) {
+            (Some(_), _) => Start::Resume,
+            (None, Some(path)) => Start::InitFrom(path.clone()),
+            (None, None) => Start::Fresh,
+        };
+        let train_config = if matches!(start, Start::Resume) { saved_config(&here)? } else { train_config };
+        let mut trainer = flight_trainer(robot, &train_config, &here, start)?;
+        let shared = Arc::new(Mutex::new((selection, Vec::<Validated>::new())));
+        let hook_state = shared.clone();
+        let (hook_robot, hook_names, hook_path) = (robot.clone(), names.clone(), selection_path.clone());
+        trainer.add_checkpoint_hook(Box::new(move |event| {
+            let path = checkpoint_dir(event.dir).join(format!("iter_{:06}.safetensors", event.iteration));
+            let began = Instant::now();
+            let score = set.judge(&hook_robot, &path).map_err(|e| e.to_string())?;
+            let env_steps = event.history.last().map_or(0, |l| l.env_steps);
+            let row =
+                Validated { iteration: event.iteration, env_steps, validation_s: began.elapsed().as_secs_f64(), score };
+            let mut state = hook_state.lock().expect("no panic while holding the selection");
+            state.0.rows.retain(|r| r.iteration != row.iteration);
+            state.0.rows.push(row.clone());
+            state.0.write(&hook_path, &hook_names).map_err(|e| e.to_string())?;
+            state.1.push(row);
+            Ok(())
+        }));
+        let gate = stage.gate;
+        trainer.run(&mut |log, _| {
+            progress(Progress::Iteration { stage: number, log });
+            let mut state = shared.lock().expect("no panic while holding the selection");
+            let fresh: Vec<Validated> = state.1.drain(..).collect();
+            for row in &fresh {
+                progress(Progress::Validated { stage: number, row, gate_met: state.0.gate_met(&gate) });
+            }
+            !state.0.gate_met(&gate)
+        })?;
+        let state = shared.lock().expect("no panic while holding the selection");
+        selection = state.0.clone();
+    }
+    select(stage, number, &here, &selection)
+}
+
+/// The stage's checkpoints on disk, by iteration.
+fn saved_checkpoints(here: &Path) -> Vec<(usize, PathBuf)> {
+    let Ok(entries) = std::fs::read_dir(checkpoint_dir(here)) else { return Vec::new() };
+    let mut found: Vec<(usize, PathBuf)> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter_map(|p| {
+            let name = p.file_name()?.to_str()?;
+            let number = name.strip_prefix("iter_")?.strip_suffix(".safetensors")?.parse().ok()?;
+            Some((number, p))
+        })
+        .collect();
+    found.sort();
+    found
+}
+
+/// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate.
+fn select(
+    stage: &StageConfig,
+    number: usize,
+    here: &Path,
+    selection: &Selection,
+) -> Result<StageOutcome, CurriculumError> {
+    let history = flapper_ppo::training_log::read_history(&here.join("training.csv"))
+        .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
+    let last = history.last();
+    let iterations = last.map_or(0, |l| l.iteration);
+    let Some(best) = selection.best_meeting(&stage.gate) else {
+        let best = selection.best();
+        return Err(CurriculumError::GateMissed {
+            stage: number,
+            name: stage.name.clone(),
+            gate: describe_gate(&stage.gate),
+            iterations,
+            best_iteration: best.map_or(0, |b| b.iteration),
+            best_completed: best.map_or(0.0, |b| b.score.completed_percent),
+            best_rms_m: best.map_or(f64::NAN, |b| b.score.mean_rms_m),
+            dir: here.to_owned(),
+        });
+    };
+    let checkpoint = PathBuf::from(format!("stage{number}/checkpoints/iter_{:06}.safetensors", best.iteration));
+    let validation_s: f64 = selection.rows.iter().map(|r| r.validation_s).sum();
+    let outcome = StageOutcome {
+        stage: number,
+        name: stage.name.clone(),
+        iterations,
+        env_steps: last.map_or(0, |l| l.env_steps),
+        wall_time_s: last.map_or(0.0, |l| l.wall_time_s) + validation_s,
+        selected_iteration: best.iteration,
+        validation_score: best.score.completed_percent,
+        validation_rms_m: best.score.mean_rms_m,
+        checkpoint,
+    };
+    let json = serde_json::to_string_pretty(&outcome).expect("the outcome serializes");
+    checkpoint::write_atomically(&here.join("selected.json"), json.as_bytes())?;
+    Ok(outcome)
+}
+
+/// The gate in words, for messages.
+pub fn describe_gate(gate: &crate::config::Gate) -> String {
+    let mut text =
+        format!("every validation reference completed in at least {}% of its episodes", gate.completed_percent);
+    if let Some(rms) = gate.max_rms_m {
+        text.push_str(&format!(", mean RMS error at most {rms} m"));
+    }
+    if gate.min_iterations > 0 {
+        text.push_str(&format!(", from iteration {} on", gate.min_iterations));
+    }
+    text
+}

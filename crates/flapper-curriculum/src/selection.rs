@@ -1,0 +1,205 @@
+//! A stage's selection table (`selection.csv`): one row per validated checkpoint, kept in memory and
+//! rewritten whole after each validation, and the choice of the checkpoint the stage hands over.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::Gate;
+use crate::validation::{ReferenceScore, Score};
+
+/// One validated checkpoint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Validated {
+    pub iteration: usize,
+    pub env_steps: u64,
+    /// Seconds spent flying the validation set.
+    pub validation_s: f64,
+    pub score: Score,
+}
+
+/// The table's file, row by row: fixed columns, then completion and RMS per reference.
+#[derive(Debug, thiserror::Error)]
+pub enum SelectionError {
+    #[error("selection table '{path}': {message}")]
+    File { path: PathBuf, message: String },
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct Selection {
+    pub rows: Vec<Validated>,
+}
+
+impl Selection {
+    /// The rows of `path` (none if it does not exist), for `references` in this order.
+    pub fn read(path: &Path, references: &[String]) -> Result<Self, SelectionError> {
+        if !path.exists() {
+            return Ok(Self::default());
+        }
+        let error = |message: String| SelectionError::File { path: path.to_owned(), message };
+        let mut reader = csv::Reader::from_path(path).map_err(|e| error(e.to_string()))?;
+        let expected = header(references);
+        let headers: Vec<String> =
+            reader.headers().map_err(|e| error(e.to_string()))?.iter().map(String::from).collect();
+        if headers != expected {
+            return Err(error(format!(
+                "its columns are not those of this stage's validation set ({})",
+                expected.join(",")
+            )));
+        }
+        let mut rows = Vec::new();
+        for (line, record) in reader.records().enumerate() {
+            let record = record.map_err(|e| error(e.to_string()))?;
+            let number = |k: usize| -> Result<f64, SelectionError> {
+                record.get(k).and_then(|v| v.parse().ok()).ok_or_else(|| error(format!("row {}: column {k}", line + 2)))
+            };
+            let references = references
+                .iter()
+                .enumerate()
+                .map(|(k, name)| {
+                    let completed = number(FIXED.len() + 3 * k)? as usize;
+                    let episodes = number(FIXED.len() + 3 * k + 1)? as usize;
+                    Ok(ReferenceScore {
+                        name: name.clone(),
+                        completed,
+                        episodes,
+                        mean_rms_m: number(FIXED.len() + 3 * k + 2)?,
+                    })
+                })
+                .collect::<Result<Vec<_>, SelectionError>>()?;
+            rows.push(Validated {
+                iteration: number(0)? as usize,
+                env_steps: number(1)? as u64,
+                validation_s: number(4)?,
+                score: Score { completed_percent: number(2)?, mean_rms_m: number(3)?, references },
+            });
+        }
+        Ok(Self { rows })
+    }
+
+    pub fn write(&self, path: &Path, references: &[String]) -> Result<(), SelectionError> {
+        let rows = self.rows.iter().map(|row| {
+            let mut values = vec![
+                row.iteration.to_string(),
+                row.env_steps.to_string(),
+                // Shortest round-trip decimals: a resumed run ranks exactly what the uninterrupted one did.
+                row.score.completed_percent.to_string(),
+                row.score.mean_rms_m.to_string(),
+                row.validation_s.to_string(),
+            ];
+            for r in &row.score.references {
+                values.extend([r.completed.to_string(), r.episodes.to_string(), r.mean_rms_m.to_string()]);
+            }
+            values
+        });
+        flapper_files::write_csv_rows(path, &header(references), rows)
+            .map_err(|e| SelectionError::File { path: path.to_owned(), message: e.to_string() })
+    }
+
+    pub fn has(&self, iteration: usize) -> bool {
+        self.rows.iter().any(|r| r.iteration == iteration)
+    }
+
+    /// Drops the rows after `iteration` (a run resumed from an earlier checkpoint redoes them).
+    pub fn truncate_after(&mut self, iteration: usize) {
+        self.rows.retain(|r| r.iteration <= iteration);
+    }
+
+    /// Whether a row at or after the gate's `min_iterations` meets it.
+    pub fn gate_met(&self, gate: &Gate) -> bool {
+        self.eligible(gate).next().is_some()
+    }
+
+    /// Whether a row before `iteration` met the gate (a run that met it there has stopped since).
+    pub fn gate_met_before(&self, gate: &Gate, iteration: usize) -> bool {
+        self.eligible(gate).any(|r| r.iteration < iteration)
+    }
+
+    /// The best checkpoint among those that meet the gate (the earliest of equals), else `None`.
+    pub fn best_meeting<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        best(self.eligible(gate))
+    }
+
+    /// The best checkpoint of all, gate or not.
+    pub fn best(&self) -> Option<&Validated> {
+        best(self.rows.iter())
+    }
+
+    fn eligible<'a>(&'a self, gate: &'a Gate) -> impl Iterator<Item = &'a Validated> {
+        self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate))
+    }
+}
+
+fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
+    rows.fold(None, |best: Option<&Validated>, row| match best {
+        Some(b) if !row.score.beats(&b.score) => Some(b),
+        _ => Some(row),
+    })
+}
+
+/// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`.
+const FIXED: [&str; 5] = ["iteration", "env_steps", "completed_percent", "mean_rms_m", "validation_s"];
+
+fn header(references: &[String]) -> Vec<String> {
+    let mut columns: Vec<String> = FIXED.iter().map(|c| c.to_string()).collect();
+    for name in references {
+        columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
+    }
+    columns
+}
+
+/// What a finished stage hands over (`selected.json` in its folder).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageOutcome {
+    pub stage: usize,
+    pub name: String,
+    /// Iterations trained (the last checkpoint) and their environment steps.
+    pub iterations: usize,
+    pub env_steps: u64,
+    /// Training plus validation.
+    pub wall_time_s: f64,
+    pub selected_iteration: usize,
+    /// The selected checkpoint's completion over the validation set (percent) and mean RMS error (m).
+    pub validation_score: f64,
+    pub validation_rms_m: f64,
+    /// The selected checkpoint, relative to the curriculum folder.
+    pub checkpoint: PathBuf,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(iteration: usize, completed: usize, rms: f64) -> Validated {
+        let references = vec![ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms }];
+        let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
+        Validated { iteration, env_steps: iteration as u64 * 100, validation_s: 1.5, score }
+    }
+
+    #[test]
+    fn the_best_checkpoint_is_chosen_by_completion_then_error_never_simply_the_last() {
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)] };
+        assert_eq!(selection.best().unwrap().iteration, 30);
+        let gate = Gate { completed_percent: 100.0, max_rms_m: Some(0.35), min_iterations: 0 };
+        assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
+        let later = Gate { min_iterations: 35, ..gate };
+        assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
+        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)] };
+        assert_eq!(ties.best().unwrap().iteration, 10, "the earliest of equal checkpoints");
+    }
+
+    #[test]
+    fn the_table_reads_back_as_written_and_refuses_another_validation_set() {
+        let dir = std::env::temp_dir().join(format!("flapper-selection-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("selection.csv");
+        let names = vec!["cruise".to_owned()];
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)] };
+        selection.write(&path, &names).unwrap();
+        let back = Selection::read(&path, &names).unwrap();
+        assert_eq!(back.rows, selection.rows);
+        let e = Selection::read(&path, &["loop".to_owned()]).unwrap_err().to_string();
+        assert!(e.contains("selection.csv") && e.contains("loop_completed"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,38 @@
+//! `summary.json`: the seed, the command, and per stage its iterations, environment steps, wall time,
+//! the checkpoint it handed over and that checkpoint's validation score; the totals.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::config::CurriculumConfig;
+use crate::run::CurriculumError;
+use crate::selection::StageOutcome;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary<'a> {
+    pub seed: u64,
+    pub command: &'a str,
+    pub stages: &'a [StageOutcome],
+    pub total_env_steps: u64,
+    /// Training and validation of every stage (not the time a run stood interrupted).
+    pub total_wall_time_s: f64,
+}
+
+impl<'a> Summary<'a> {
+    pub fn new(config: &CurriculumConfig, command: &'a str, stages: &'a [StageOutcome]) -> Self {
+        Self {
+            seed: config.seed,
+            command,
+            stages,
+            total_env_steps: stages.iter().map(|s| s.env_steps).sum(),
+            total_wall_time_s: stages.iter().map(|s| s.wall_time_s).sum(),
+        }
+    }
+
+    pub fn write(&self, path: &Path) -> Result<(), CurriculumError> {
+        let json = serde_json::to_string_pretty(self).expect("the summary serializes");
+        flapper_ppo::checkpoint::write_atomically(path, json.as_bytes())?;
+        Ok(())
+    }
+}

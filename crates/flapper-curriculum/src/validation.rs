@@ -1,0 +1,181 @@
+//! Judging a checkpoint: fly a stage's validation set (named or CSV references and procedural ones,
+//! from randomized starts drawn with the validation seed) with the policy's mean action, and score it:
+//! completion first, then RMS error. Flights use the CPU-independent inference path, so a checkpoint's
+//! score is the same on every machine and when it is judged again after an interruption.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::{PolicyFileError, load_flight_policy};
+use flapper_sim::{ModelError, RobotModel};
+use flapper_task::TaskConfig;
+use flapper_task::reference::generator::procedural;
+use flapper_task::reference::{Reference, ReferenceError, resolve};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::config::{Gate, ValidationConfig};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ValidationError {
+    #[error(transparent)]
+    Policy(#[from] PolicyFileError),
+    #[error("validation reference: {0}")]
+    Reference(#[from] ReferenceError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+/// The references of a validation set, built once per stage.
+pub struct ValidationSet {
+    pub references: Vec<Arc<Reference>>,
+    pub episodes: usize,
+    pub seed: u64,
+}
+
+impl ValidationSet {
+    /// `task` is the stage's: its control period, lookahead and procedural ranges.
+    pub fn new(
+        config: &ValidationConfig,
+        task: &TaskConfig,
+        timestep_s: f64,
+        seed: u64,
+    ) -> Result<Self, ValidationError> {
+        let dt_s = task.control_period_s(timestep_s);
+        let lookahead = task.observation.lookahead_steps;
+        let mut references = Vec::new();
+        for name in &config.references {
+            references.push(Arc::new(resolve(name, dt_s, lookahead)?));
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let duration_s = task.episode.max_steps as f64 * dt_s;
+        for k in 0..config.procedural {
+            let drawn = procedural(&task.reference, duration_s, (lookahead + 1) as f64 * dt_s, dt_s, &mut rng);
+            references.push(Arc::new(Reference::new(
+                format!("procedural-{}", k + 1),
+                drawn.dt_s(),
+                drawn.points().to_vec(),
+            )));
+        }
+        Ok(Self { references, episodes: config.episodes, seed })
+    }
+
+    pub fn names(&self) -> Vec<String> {
+        self.references.iter().map(|r| r.name().to_owned()).collect()
+    }
+
+    /// Flies every reference from `episodes` randomized starts with the policy in `policy_path`.
+    pub fn judge(&self, robot: &RobotModel, policy_path: &Path) -> Result<Score, ValidationError> {
+        let (policy, task) = load_flight_policy(policy_path)?;
+        let pilot = Pilot::Policy(Arc::new(policy));
+        let mut per_reference = Vec::new();
+        for reference in &self.references {
+            let results = evaluate_tracking(robot, &pilot, &task, reference.clone(), self.episodes, self.seed)?;
+            per_reference.push(ReferenceScore::of(reference.name(), &results));
+        }
+        Ok(Score::of(per_reference))
+    }
+}
+
+/// One reference's result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceScore {
+    pub name: String,
+    pub completed: usize,
+    pub episodes: usize,
+    /// Mean over all its episodes of each episode's RMS error (m).
+    pub mean_rms_m: f64,
+}
+
+impl ReferenceScore {
+    fn of(name: &str, results: &[EpisodeResult]) -> Self {
+        let rms: f64 = results.iter().map(EpisodeResult::rms_error_m).sum();
+        Self {
+            name: name.to_owned(),
+            completed: results.iter().filter(|r| r.completed()).count(),
+            episodes: results.len(),
+            mean_rms_m: rms / results.len().max(1) as f64,
+        }
+    }
+
+    pub fn completed_percent(&self) -> f64 {
+        100.0 * self.completed as f64 / self.episodes.max(1) as f64
+    }
+}
+
+/// A checkpoint's score over the whole validation set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Score {
+    /// Completed episodes over all references, in percent: the first key of the ranking.
+    pub completed_percent: f64,
+    /// Mean RMS error over all episodes (m): the second key, lower is better.
+    pub mean_rms_m: f64,
+    pub references: Vec<ReferenceScore>,
+}
+
+impl Score {
+    fn of(references: Vec<ReferenceScore>) -> Self {
+        let episodes: usize = references.iter().map(|r| r.episodes).sum();
+        let completed: usize = references.iter().map(|r| r.completed).sum();
+        let rms: f64 = references.iter().map(|r| r.mean_rms_m * r.episodes as f64).sum();
+        Self {
+            completed_percent: 100.0 * completed as f64 / episodes.max(1) as f64,
+            mean_rms_m: rms / episodes.max(1) as f64,
+            references,
+        }
+    }
+
+    /// True when `self` ranks above `other`: more completed, or as many and a smaller RMS error.
+    pub fn beats(&self, other: &Score) -> bool {
+        self.completed_percent > other.completed_percent
+            || (self.completed_percent == other.completed_percent && self.mean_rms_m < other.mean_rms_m)
+    }
+
+    /// Whether the gate's bars are met (the iteration bar is the caller's).
+    pub fn meets(&self, gate: &Gate) -> bool {
+        self.references.iter().all(|r| r.completed_percent() >= gate.completed_percent)
+            && gate.max_rms_m.is_none_or(|max| self.mean_rms_m <= max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn score(per_reference: &[(usize, usize, f64)]) -> Score {
+        Score::of(
+            per_reference
+                .iter()
+                .enumerate()
+                .map(|(k, &(completed, episodes, mean_rms_m))| ReferenceScore {
+                    name: format!("r{k}"),
+                    completed,
+                    episodes,
+                    mean_rms_m,
+                })
+                .collect(),
+        )
+    }
+
+    #[test]
+    fn completion_ranks_first_then_the_rms_error() {
+        let (a, b, c) = (score(&[(9, 10, 0.5)]), score(&[(10, 10, 0.9)]), score(&[(10, 10, 0.3)]));
+        assert!(b.beats(&a) && !a.beats(&b), "more completed wins whatever the error");
+        assert!(c.beats(&b) && !b.beats(&c), "as many completed: the smaller error wins");
+        assert!(!c.beats(&c.clone()), "a tie is not a win (the earlier checkpoint stays)");
+        let mixed = score(&[(10, 10, 0.2), (5, 10, 1.0)]);
+        assert_eq!(mixed.completed_percent, 75.0);
+        assert!((mixed.mean_rms_m - 0.6).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_gate_asks_every_reference_and_the_mean_error() {
+        let gate = Gate { completed_percent: 90.0, max_rms_m: Some(0.5), min_iterations: 0 };
+        assert!(score(&[(10, 10, 0.3), (9, 10, 0.4)]).meets(&gate));
+        assert!(!score(&[(10, 10, 0.3), (8, 10, 0.4)]).meets(&gate), "one reference below the bar");
+        assert!(!score(&[(10, 10, 0.6), (10, 10, 0.6)]).meets(&gate), "the error above its bar");
+        assert!(score(&[(10, 10, 3.0)]).meets(&Gate { max_rms_m: None, ..gate }));
+    }
+}

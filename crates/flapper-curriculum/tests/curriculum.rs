@@ -1,0 +1,170 @@
+//! The curriculum end to end with tiny budgets: every stage, validation and selection, the summary; a
+//! missed gate stops the run with a message naming it; a run interrupted between stages or inside one
+//! continues to exactly the files of an uninterrupted run.
+
+use std::path::{Path, PathBuf};
+
+use flapper_curriculum::run::stage_dir;
+use flapper_curriculum::{CurriculumConfig, CurriculumRequest, run_curriculum};
+use flapper_sim::RobotModel;
+
+const TINY: &str = r#"
+seed = 5
+[runner]
+envs = 4
+threads = 1
+[ppo]
+steps_per_env = 8
+minibatches = 2
+actor_hidden = [16]
+critic_hidden = [16]
+[[stages]]
+name = "cruise"
+max_iterations = 4
+validate_every = 2
+validation = { references = ["cruise"], episodes = 2 }
+gate = { completed_percent = 0 }
+task = { stage = 1 }
+[[stages]]
+name = "climb and dive"
+max_iterations = 4
+validate_every = 1
+start_noise_std = 0.8
+validation = { references = ["longitudinal"], procedural = 1, episodes = 1 }
+gate = { completed_percent = 0, min_iterations = 4 }
+task = { stage = 2 }
+"#;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flapper-curriculum-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn run(dir: &Path, text: &str, until_stage: Option<usize>) -> Result<usize, String> {
+    let robot = RobotModel::flapper().unwrap();
+    let config = CurriculumConfig::from_toml(text, "tiny.toml").unwrap();
+    let request = CurriculumRequest { dir, config, until_stage, command: "test".into() };
+    run_curriculum(&robot, request, &mut |_| {}).map(|stages| stages.len()).map_err(|e| e.to_string())
+}
+
+/// A file with the columns that measure time removed (training.csv, selection.csv), or as it is.
+fn without_timing(path: &Path) -> Vec<Vec<String>> {
+    let mut reader = csv::Reader::from_path(path).unwrap();
+    let headers: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let timing = ["wall_time_s", "steps_per_s", "env_time_s", "inference_time_s", "update_time_s", "validation_s"];
+    let keep: Vec<usize> = (0..headers.len()).filter(|&k| !timing.contains(&headers[k].as_str())).collect();
+    let mut rows = vec![keep.iter().map(|&k| headers[k].clone()).collect()];
+    for record in reader.records() {
+        let record = record.unwrap();
+        rows.push(keep.iter().map(|&k| record[k].to_owned()).collect());
+    }
+    rows
+}
+
+fn same_run(a: &Path, b: &Path) {
+    for stage in [1, 2] {
+        for file in ["training.csv", "selection.csv"] {
+            let (x, y) = (stage_dir(a, stage).join(file), stage_dir(b, stage).join(file));
+            assert_eq!(without_timing(&x), without_timing(&y), "stage {stage} {file}");
+        }
+    }
+    // The networks, noise and normalizer (the file's metadata also records wall time).
+    let policy = |dir: &Path| flapper_ppo::checkpoint::load(&dir.join("policy.safetensors")).unwrap().policy;
+    assert!(policy(a) == policy(b), "the final policies differ");
+}
+
+#[test]
+fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
+    let whole = scratch("whole");
+    assert_eq!(run(&whole, TINY, None).unwrap(), 2);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["seed"], 5);
+    assert_eq!(summary["command"], "test");
+    let stages = summary["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 2);
+    // Stage 1's gate (0%) is met at its first validation (iteration 2): it stops one iteration later.
+    // Stage 2's gate is looked at from iteration 4 on: it spends its budget.
+    for (k, (stage, iterations)) in stages.iter().zip([3, 4]).enumerate() {
+        assert_eq!(stage["stage"], k + 1);
+        assert_eq!(stage["iterations"], iterations);
+        assert_eq!(stage["env_steps"], iterations * 4 * 8);
+        assert!(stage["wall_time_s"].as_f64().unwrap() > 0.0);
+        for key in ["selected_iteration", "validation_score"] {
+            assert!(stage[key].is_number(), "{key}");
+        }
+    }
+    assert_eq!(summary["total_env_steps"], (3 + 4) * 4 * 8);
+    let selection = without_timing(&stage_dir(&whole, 2).join("selection.csv"));
+    assert_eq!(selection.len(), 1 + 4, "stage 2 validated every iteration");
+    assert!(selection[0].contains(&"procedural-1_completed".to_owned()), "{:?}", selection[0]);
+    let selected = stages[1]["selected_iteration"].as_u64().unwrap() as usize;
+    assert!(stage_dir(&whole, 2).join(format!("checkpoints/iter_{selected:06}.safetensors")).exists());
+    for file in ["policy.safetensors", "curriculum.svg", "curriculum.toml"] {
+        assert!(whole.join(file).exists(), "{file}");
+    }
+
+    // Between stages: stage 1 alone, then the rest.
+    let between = scratch("between");
+    assert_eq!(run(&between, TINY, Some(1)).unwrap(), 1);
+    assert!(!stage_dir(&between, 2).exists());
+    assert_eq!(run(&between, TINY, None).unwrap(), 2);
+    same_run(&whole, &between);
+
+    // Inside a stage: what a kill after stage 2's second checkpoint leaves (later checkpoints, the final
+    // policy and the stage's outcome not yet written; its training.csv and selection.csv a row ahead).
+    let inside = scratch("inside");
+    copy_dir(&whole, &inside);
+    let stage2 = stage_dir(&inside, 2);
+    for name in ["selected.json", "policy.safetensors", "policy.safetensors.json"] {
+        std::fs::remove_file(stage2.join(name)).unwrap();
+    }
+    for iteration in [3, 4] {
+        for suffix in ["", ".json"] {
+            std::fs::remove_file(stage2.join(format!("checkpoints/iter_{iteration:06}.safetensors{suffix}"))).unwrap();
+        }
+    }
+    std::fs::remove_file(inside.join("policy.safetensors")).unwrap();
+    assert_eq!(run(&inside, TINY, None).unwrap(), 2);
+    same_run(&whole, &inside);
+
+    // Another seed on the same folder is refused; so is a folder holding someone else's files.
+    let e = run(&whole, &TINY.replace("seed = 5", "seed = 6"), None).unwrap_err();
+    assert!(e.contains("seed"), "{e}");
+    let foreign = scratch("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+    let e = run(&foreign, TINY, None).unwrap_err();
+    assert!(e.contains("curriculum.toml"), "{e}");
+    assert_eq!(std::fs::read_to_string(foreign.join("notes.txt")).unwrap(), "mine");
+    for dir in [whole, between, inside, foreign] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
+#[test]
+fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
+    let dir = scratch("gate");
+    let text = TINY.replacen("gate = { completed_percent = 0 }", "gate = { completed_percent = 100 }", 1);
+    let e = run(&dir, &text, None).unwrap_err();
+    assert!(e.contains("stage 1 ('cruise') missed its gate"), "{e}");
+    assert!(e.contains("at least 100%") && e.contains("best checkpoint") && e.contains("completed 0.0%"), "{e}");
+    assert!(!stage_dir(&dir, 2).exists(), "the run stopped at the missed gate");
+    let again = run(&dir, &text, None).unwrap_err();
+    assert_eq!(again, e, "running again reports the same, without training more");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
