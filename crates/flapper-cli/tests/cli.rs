@@ -113,7 +113,7 @@ fn unknown_reference_and_bad_csv_are_one_line_errors() {
     assert_one_line_error(&flapper(&["reference", "barrel-roll"]), "barrel-roll");
     let dir = scratch("bad-reference");
     let file = dir.join("path.csv");
-    std::fs::write(&file, "t,x,y,z\n0,0,0,0\n0.5,1,0,inf\n1,2,0,0\n").unwrap();
+    std::fs::write(&file, "time_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,inf\n1,2,0,0\n").unwrap();
     assert_one_line_error(&flapper(&["reference", file.to_str().unwrap(), "--out", dir.to_str().unwrap()]), "line 3");
     assert!(!dir.join("reference.csv").exists(), "nothing written for a rejected file");
 }

@@ -103,6 +103,18 @@ fn csv_reference_loads_and_resamples() {
 }
 
 #[test]
+fn csv_columns_are_read_by_name_in_any_order() {
+    let ordered = "time_s,x_m,y_m,z_m\n0,0,0,10\n0.5,2,1,10\n1.0,4,2,10.5\n";
+    let shuffled = "x_m,y_m,z_m,time_s\n0,0,10,0\n2,1,10,0.5\n4,2,10.5,1.0\n";
+    let (a, b) = (
+        parse_reference_csv(ordered, "a.csv", DT, 30).unwrap(),
+        parse_reference_csv(shuffled, "b.csv", DT, 30).unwrap(),
+    );
+    assert_eq!(a.points(), b.points());
+    assert!((b.target(50) - Vec3::new(4.0, 2.0, 10.5)).length() < 1e-9);
+}
+
+#[test]
 fn bad_csv_references_are_rejected_naming_the_line() {
     let check = |text: &str, needles: &[&str]| {
         let err = parse_reference_csv(text, "path.csv", DT, 30).unwrap_err().to_string();
@@ -110,18 +122,22 @@ fn bad_csv_references_are_rejected_naming_the_line() {
             assert!(err.contains(needle), "'{needle}' not in: {err}");
         }
     };
-    check("t,x,y,z\n0,0,0,0\n0.5,1,0,0\n0.5,2,0,0\n", &["path.csv", "line 4", "does not increase"]);
-    check("t,x,y,z\n0,0,0,0\n0.5,nan,0,0\n1.0,2,0,0\n", &["line 3", "not finite"]);
-    check("t,x,y,z\n0,0,0,0\n0.5,abc,0,0\n", &["line 3", "'abc' is not a number"]);
-    check("t,x,y,z\n0,0,0,0\n0.5,50,0,0\n1.0,51,0,0\n", &["line 3", "m/s"]);
-    check("t,x,y,z\n0,0,0,0\n0.3,1,0,0\n", &["0.300 s", "lookahead"]);
-    check("t,x,y,z\n0,0,0\n", &["line 2", "4 columns"]);
-    check("t,x,y,z\n", &["no data rows"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n0.5,2,0,0\n", &["path.csv", "line 4", "does not increase"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,0\n0.5,nan,0,0\n1.0,2,0,0\n", &["line 3", "not finite"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,0\n0.5,abc,0,0\n", &["line 3", "'abc' is not a number"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,0\n0.5,50,0,0\n1.0,51,0,0\n", &["line 3", "m/s"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,0\n0.3,1,0,0\n", &["0.300 s", "lookahead"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0\n", &["line 2", "4 columns"]);
+    check("time_s,x_m,y_m,z_m\n", &["no data rows"]);
+    // Columns are read by their names, never by position.
+    check("x_m,y_m,z_m,time\n0,0,10,0\n", &["line 1", "unknown column 'time'", "time_s,x_m,y_m,z_m"]);
+    check("x_m,y_m,z_m\n0,0,10\n", &["line 1", "no column 'time_s'"]);
+    check("time_s,x_m,y_m,z_m,z_m\n0,0,0,0,0\n", &["line 1", "names 'z_m' twice"]);
     // No header: the first row would be lost silently if taken for one.
     check("0,0,0,10\n1,3.8,0,10\n2,7.6,0,10\n", &["line 1", "is data, not a header"]);
     // A constant far-away coordinate (zero speed) and a reference that would need a billion points.
-    check("t,x,y,z\n0,1e300,0,0\n1,1e300,0,0\n", &["line 2", "beyond"]);
-    check("t,x,y,z\n0,0,0,10\n999999,0,0,10\n", &["covers 999999 s", "at most 3600"]);
+    check("time_s,x_m,y_m,z_m\n0,1e300,0,0\n1,1e300,0,0\n", &["line 2", "beyond"]);
+    check("time_s,x_m,y_m,z_m\n0,0,0,10\n999999,0,0,10\n", &["covers 999999 s", "at most 3600"]);
 }
 
 #[test]

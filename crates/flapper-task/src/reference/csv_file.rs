@@ -1,5 +1,6 @@
-//! A user's own reference: a CSV with a header and columns `time_s, x_m, y_m, z_m` (any header
-//! names; the first four columns are used). It is checked, then resampled to the control rate.
+//! A user's own reference: a CSV whose header names the columns `time_s`, `x_m`, `y_m` and `z_m`, in any
+//! order (read by name; a missing or unknown column is refused by name). It is checked, then resampled to
+//! the control rate.
 
 use std::path::Path;
 
@@ -24,8 +25,8 @@ pub enum ReferenceFileError {
     Whole { path: String, message: String },
 }
 
-/// One row of a reference CSV as flapper writes it (`flapper reference`); the reader accepts any
-/// header names and uses the first four columns.
+/// One row of a reference CSV as flapper writes it (`flapper reference`); the reader takes the same
+/// column names in any order.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ReferenceRow {
     pub time_s: f64,
@@ -50,6 +51,27 @@ pub fn reference_csv_text(points: &[Vec3], dt_s: f64) -> String {
         writer.serialize(row).expect("numbers serialize");
     }
     String::from_utf8(writer.into_inner().expect("writing to memory")).expect("CSV of numbers is UTF-8")
+}
+
+/// The columns a reference CSV must name, in the order the reader uses them.
+pub const COLUMNS: [&str; 4] = ["time_s", "x_m", "y_m", "z_m"];
+
+/// Where each of [`COLUMNS`] is in `header`, or why the header is refused.
+fn column_order(header: &csv::StringRecord) -> Result<[usize; 4], String> {
+    let expected = COLUMNS.join(",");
+    if let Some(unknown) = header.iter().find(|name| !COLUMNS.contains(name)) {
+        return Err(format!("unknown column '{unknown}' in the header (the columns are {expected}, in any order)"));
+    }
+    let mut order = [0; 4];
+    for (slot, name) in order.iter_mut().zip(COLUMNS) {
+        let found: Vec<usize> = header.iter().enumerate().filter(|(_, h)| *h == name).map(|(k, _)| k).collect();
+        *slot = match found.as_slice() {
+            [one] => *one,
+            [] => return Err(format!("the header has no column '{name}' (the columns are {expected}, in any order)")),
+            _ => return Err(format!("the header names '{name}' twice")),
+        };
+    }
+    Ok(order)
 }
 
 /// Loads and checks a reference CSV, resampled every `dt_s`. It must cover at least
@@ -77,6 +99,7 @@ pub fn parse_reference_csv(
     {
         return Err(at_line(1, "is data, not a header: the first line names the columns (time_s,x_m,y_m,z_m)".into()));
     }
+    let columns = column_order(reader.headers().map_err(|e| at_line(1, e.to_string()))?).map_err(|m| at_line(1, m))?;
     let mut samples: Vec<(f64, Vec3)> = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| {
@@ -84,12 +107,12 @@ pub fn parse_reference_csv(
             at_line(line, e.to_string())
         })?;
         let line = record.position().map_or(0, |p| p.line() as usize);
-        if record.len() < 4 {
-            return Err(at_line(line, format!("expected 4 columns (time, x, y, z), found {}", record.len())));
+        if record.len() != COLUMNS.len() {
+            return Err(at_line(line, format!("expected 4 columns ({}), found {}", COLUMNS.join(","), record.len())));
         }
         let mut values = [0.0f64; 4];
-        for (i, value) in values.iter_mut().enumerate() {
-            let field = &record[i];
+        for (value, &column) in values.iter_mut().zip(&columns) {
+            let field = &record[column];
             *value = field.parse().map_err(|_| at_line(line, format!("'{field}' is not a number")))?;
             if !value.is_finite() {
                 return Err(at_line(line, format!("'{field}' is not finite")));
