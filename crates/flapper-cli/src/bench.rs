@@ -1,6 +1,8 @@
 //! `flapper bench`: the speed of the simulator, the environments, the network update and training end
 //! to end, as medians over repeats.
 
+use std::path::Path;
+
 use anyhow::{Result, bail};
 use flapper_sim::RobotModel;
 
@@ -101,4 +103,29 @@ pub fn bench_command(
         );
     }
     Ok(())
+}
+
+/// `flapper bench`'s options.
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Number of timed blocks (the median over blocks is reported).
+    #[arg(long, default_value_t = 21)]
+    pub blocks: usize,
+    /// MuJoCo steps per block.
+    #[arg(long, default_value_t = 5000)]
+    pub steps: usize,
+    /// Also time this many vectorized environments (0 = skip).
+    #[arg(long, default_value_t = 256)]
+    pub envs: usize,
+    /// Worker threads for the environments (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Also time this many PPO iterations end to end on the flight task (0 = skip).
+    #[arg(long, default_value_t = 10)]
+    pub train_iterations: usize,
+}
+
+pub fn run(args: BenchArgs, model: Option<&Path>) -> Result<()> {
+    let robot = crate::robot::load(model)?;
+    bench_command(&robot, args.blocks, args.steps, args.envs, args.threads, args.train_iterations)
 }

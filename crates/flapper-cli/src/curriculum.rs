@@ -1,12 +1,11 @@
 //! `flapper curriculum`: train the final controller from scratch, every stage in turn, unattended; run
 //! again on the same folder to continue after an interruption.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
 use flapper_curriculum::{CurriculumConfig, CurriculumRequest, Progress, run_curriculum};
-use flapper_sim::RobotModel;
 
 /// The shipped curriculum, relative to the repository (the default `--config`).
 const SHIPPED_CONFIG: &str = "configs/curriculum.toml";
@@ -28,7 +27,8 @@ pub struct CurriculumArgs {
     until_stage: Option<u64>,
 }
 
-pub fn run(robot: &RobotModel, args: CurriculumArgs) -> Result<()> {
+pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
+    let robot = &crate::robot::load(model)?;
     let mut config = CurriculumConfig::load(&args.config)?;
     if let Some(seed) = args.seed {
         config.seed = seed;

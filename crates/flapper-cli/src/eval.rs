@@ -1,7 +1,7 @@
 //! `flapper eval`: fly a policy and the scripted baseline on one reference, print the table side by
 //! side, write CSV and plots per pilot and a summary CSV.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
@@ -14,8 +14,8 @@ use flapper_eval::tracking_report::{
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 
-/// `flapper eval`'s arguments, as parsed.
-pub struct EvalArgs<'a> {
+/// What `flapper eval` flies, checked and borrowed from [`EvalArgs`].
+pub struct EvalRequest<'a> {
     pub policy: Option<&'a Path>,
     pub reference: &'a str,
     pub episodes: usize,
@@ -27,8 +27,8 @@ pub struct EvalArgs<'a> {
     pub observations: bool,
 }
 
-pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
-    let EvalArgs { policy: policy_path, reference, episodes, seed, out, baseline, observations } = args;
+pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
+    let EvalRequest { policy: policy_path, reference, episodes, seed, out, baseline, observations } = args;
     if episodes == 0 || episodes > 100_000 {
         bail!("--episodes must be 1 to 100000, got {episodes}");
     }
@@ -96,4 +96,53 @@ pub fn eval_command(robot: &RobotModel, args: EvalArgs) -> Result<()> {
     write_summary_csv(&summaries, &summary_path)?;
     println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
     Ok(())
+}
+
+/// `flapper eval`'s options.
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// Trained policy (a run's policy.safetensors or a checkpoint); required unless --baseline-only.
+    #[arg(long, value_name = "FILE")]
+    pub policy: Option<PathBuf>,
+    /// A named reference (see `flapper reference --list`) or a CSV file of time_s,x_m,y_m,z_m.
+    #[arg(long, default_value = "longitudinal")]
+    pub reference: String,
+    /// Episodes, each from its own randomized start.
+    #[arg(long, default_value_t = 100)]
+    pub episodes: usize,
+    /// Seed of the randomized starts.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output folder (created if needed): policy/ and scripted/ subfolders and summary.csv.
+    #[arg(long, default_value = "run/eval")]
+    pub out: PathBuf,
+    /// Do not fly the scripted baseline.
+    #[arg(long)]
+    pub no_baseline: bool,
+    /// Fly only the scripted baseline (no policy).
+    #[arg(long, conflicts_with_all = ["policy", "no_baseline"])]
+    pub baseline_only: bool,
+    /// Also write what each pilot saw and did in episode 0 (observations and actions, one row
+    /// per control step) as PILOT/observations.csv: for checking another implementation.
+    #[arg(long)]
+    pub observations: bool,
+}
+
+pub fn run(args: EvalArgs, model: Option<&Path>) -> Result<()> {
+    if args.policy.is_none() && !args.baseline_only {
+        bail!(
+            "give --policy FILE (the final controller: {}), or --baseline-only to fly the scripted gait alone",
+            flapper_report::FINAL_POLICY
+        );
+    }
+    let request = EvalRequest {
+        policy: args.policy.as_deref(),
+        reference: &args.reference,
+        episodes: args.episodes,
+        seed: args.seed,
+        out: &args.out,
+        baseline: !args.no_baseline,
+        observations: args.observations,
+    };
+    eval_command(&crate::robot::load(model)?, request)
 }

@@ -1,7 +1,7 @@
 //! `flapper fly`: a scripted gait or an unpowered glide, without any learning: the robot and its
 //! aerodynamics on their own.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::ValueEnum;
@@ -64,4 +64,25 @@ pub fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_
         println!("wrote {}", plot.display());
     }
     Ok(())
+}
+
+/// `flapper fly`'s options.
+#[derive(clap::Args)]
+pub struct FlyArgs {
+    /// Which controller flies the robot.
+    #[arg(long, value_enum, default_value_t = ControllerKind::Scripted)]
+    pub controller: ControllerKind,
+    /// Flight duration in seconds.
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    pub seconds: f64,
+    /// Output directory (created if needed).
+    #[arg(long, default_value = "run/fly")]
+    pub out: PathBuf,
+    /// Tail angle of the glide controller in degrees (negative = trailing edge up).
+    #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
+    pub tail_deg: f64,
+}
+
+pub fn run(args: FlyArgs, model: Option<&Path>) -> Result<()> {
+    fly_command(&crate::robot::load(model)?, args.controller, args.seconds, args.tail_deg, &args.out)
 }

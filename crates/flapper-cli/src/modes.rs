@@ -1,6 +1,6 @@
 //! `flapper modes`: flapping and power per segment of the longitudinal reference: does the policy glide?
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Result;
@@ -36,4 +36,19 @@ pub fn modes_command(robot: &RobotModel, policy_path: &Path, out: &Path) -> Resu
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `flapper modes`'s options.
+#[derive(clap::Args)]
+pub struct ModesArgs {
+    /// Trained policy (a run's policy.safetensors or a checkpoint).
+    #[arg(long, value_name = "FILE")]
+    pub policy: PathBuf,
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "run/modes")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: ModesArgs, model: Option<&Path>) -> Result<()> {
+    modes_command(&crate::robot::load(model)?, &args.policy, &args.out)
 }

@@ -1,6 +1,6 @@
 //! `flapper phase`: phase portraits of the wings and the paper's claims about them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Result;
@@ -54,4 +54,22 @@ pub fn phase_command(robot: &RobotModel, policy_path: &Path, speed_mps: f64, out
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `flapper phase`'s options.
+#[derive(clap::Args)]
+pub struct PhaseArgs {
+    /// Trained policy (a run's policy.safetensors or a checkpoint).
+    #[arg(long, value_name = "FILE")]
+    pub policy: PathBuf,
+    /// Forward speed of the cruise and the climb (the paper: 3 m/s).
+    #[arg(long, default_value_t = 3.0)]
+    pub speed_mps: f64,
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "run/phase")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: PhaseArgs, model: Option<&Path>) -> Result<()> {
+    phase_command(&crate::robot::load(model)?, &args.policy, args.speed_mps, &args.out)
 }

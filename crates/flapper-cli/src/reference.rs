@@ -1,7 +1,7 @@
 //! `flapper reference`: a named or CSV reference resampled at the control period, as CSV and top and
 //! side views.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
@@ -43,4 +43,22 @@ pub fn reference_command(
     println!("wrote {}", csv_path.display());
     println!("wrote {}", plot.display());
     Ok(())
+}
+
+/// `flapper reference`'s options.
+#[derive(clap::Args)]
+pub struct ReferenceArgs {
+    /// A named reference (see --list) or a CSV file of time_s,x_m,y_m,z_m.
+    #[arg(required_unless_present = "list")]
+    pub reference: Option<String>,
+    /// List the named references and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Output directory (created if needed).
+    #[arg(long, default_value = "run/reference")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: ReferenceArgs, model: Option<&Path>) -> Result<()> {
+    reference_command(&crate::robot::load(model)?, args.reference.as_deref(), args.list, &args.out)
 }

@@ -1,6 +1,6 @@
 //! `flapper report` and `flapper render`: the paper's figures regenerated, and one flight rendered.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use flapper_report::{ReportSettings, generate, render_flight, step_count};
@@ -38,4 +38,39 @@ pub fn render_command(robot: &RobotModel, policy: &Path, reference: &str, seed: 
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `flapper report`'s options.
+#[derive(clap::Args)]
+pub struct ReportArgs {
+    /// The controller the report shows (default: the final shipped controller).
+    #[arg(long, value_name = "FILE", default_value = flapper_report::FINAL_POLICY)]
+    pub policy: PathBuf,
+    /// Randomized starts per named reference.
+    #[arg(long, default_value_t = 100)]
+    pub episodes: usize,
+    /// Episodes per setting of the robustness sweeps (fluid coefficients, winds, Table III).
+    #[arg(long, default_value_t = 50)]
+    pub robustness_episodes: usize,
+    /// Seed of the randomized starts and the drawn dynamics.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Skip the rendered snapshots and the video (everything else is written).
+    #[arg(long)]
+    pub no_pictures: bool,
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "run/report")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: ReportArgs, model: Option<&Path>) -> Result<()> {
+    let settings = ReportSettings {
+        policy: args.policy,
+        episodes: args.episodes,
+        robustness_episodes: args.robustness_episodes,
+        seed: args.seed,
+        pictures: !args.no_pictures,
+        ..Default::default()
+    };
+    report_command(&crate::robot::load(model)?, &settings, &args.out)
 }

@@ -1,7 +1,7 @@
 //! `flapper robustness`: the paper's robustness sweeps (Fig. 8-9) on one reference, with a progress
 //! bar; tables on stdout, CSV, JSON and plots in the output folder.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Result, bail};
@@ -10,7 +10,8 @@ use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::Pilot;
 use flapper_sim::RobotModel;
 
-pub struct RobustnessArgs<'a> {
+/// What `flapper robustness` runs, borrowed from [`RobustnessArgs`].
+pub struct RobustnessRequest<'a> {
     pub policy: &'a Path,
     pub reference: &'a str,
     pub episodes: usize,
@@ -21,7 +22,7 @@ pub struct RobustnessArgs<'a> {
     pub out: &'a Path,
 }
 
-pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()> {
+pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result<()> {
     if args.episodes == 0 || args.episodes > 100_000 {
         bail!("--episodes must be 1 to 100000, got {}", args.episodes);
     }
@@ -152,4 +153,44 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessArgs) -> Result<()
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `flapper robustness`'s options.
+#[derive(clap::Args)]
+pub struct RobustnessArgs {
+    /// Trained policy (a run's policy.safetensors or a checkpoint).
+    #[arg(long, value_name = "FILE")]
+    pub policy: PathBuf,
+    /// A named reference (see `flapper reference --list`) or a CSV file of time_s,x_m,y_m,z_m.
+    #[arg(long, default_value = "longitudinal")]
+    pub reference: String,
+    /// Episodes per setting, each from its own randomized start.
+    #[arg(long, default_value_t = 100)]
+    pub episodes: usize,
+    /// Seed of the starts and of the drawn dynamics.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Which sweeps to run (comma-separated): fluid, wind, table3, envelope.
+    #[arg(long, value_delimiter = ',', default_value = "fluid,wind,table3,envelope")]
+    pub sweeps: Vec<String>,
+    /// Randomization ranges r of the fluid sweep (comma-separated; coefficients x[1 - r, 1 + r]).
+    /// Default: the paper's 0, 0.1, 0.2, 0.3, 0.4, 0.5.
+    #[arg(long, value_delimiter = ',')]
+    pub ranges: Option<Vec<f64>>,
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "run/robustness")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: RobustnessArgs, model: Option<&Path>) -> Result<()> {
+    let request = RobustnessRequest {
+        policy: &args.policy,
+        reference: &args.reference,
+        episodes: args.episodes,
+        seed: args.seed,
+        sweeps: &args.sweeps,
+        ranges: args.ranges.as_deref(),
+        out: &args.out,
+    };
+    robustness_command(&crate::robot::load(model)?, request)
 }

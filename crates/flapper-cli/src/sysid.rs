@@ -1,6 +1,6 @@
 //! `flapper sysid`: identify the closed loop of a policy and print its transfer functions.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Result, bail};
@@ -79,4 +79,30 @@ pub fn sysid_command(
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `flapper sysid`'s options.
+#[derive(clap::Args)]
+pub struct SysidArgs {
+    /// Trained policy (a run's policy.safetensors or a checkpoint).
+    #[arg(long, value_name = "FILE")]
+    pub policy: PathBuf,
+    /// Seed of the perturbations' phases (identification and validation records differ).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// RMS of the target perturbation on each axis (m).
+    #[arg(long, default_value_t = 0.15)]
+    pub amplitude_m: f64,
+    /// Take as input the desired position this far ahead (s, up to the 0.6 s the policy sees
+    /// ahead); 0 is the paper's input, the current desired position.
+    #[arg(long, default_value_t = 0.0)]
+    pub input_lead_s: f64,
+    /// Output folder (created if needed).
+    #[arg(long, default_value = "run/sysid")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: SysidArgs, model: Option<&Path>) -> Result<()> {
+    let robot = crate::robot::load(model)?;
+    sysid_command(&robot, &args.policy, args.seed, args.amplitude_m, args.input_lead_s, &args.out)
 }

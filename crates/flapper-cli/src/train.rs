@@ -198,3 +198,38 @@ pub fn pendulum_command(seeds: &[u64], max_iterations: usize, out: &Path) -> Res
     println!("runs (CSV, learning curves, policies) in {}", out.display());
     Ok(())
 }
+
+/// `flapper train`'s options.
+#[derive(clap::Args)]
+pub struct TrainArgs {
+    /// Run configuration (TOML with [runner], [ppo] and [task] tables; every key optional).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Curriculum stage 1-4 (replaces the config's task.stage).
+    #[arg(long)]
+    pub stage: Option<i64>,
+    /// Run folder (created; must not hold a run unless --resume).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Continue the run in --out from its latest checkpoint, with the config it started with.
+    #[arg(long, conflicts_with_all = ["config", "stage", "init_from", "seed"])]
+    pub resume: bool,
+    /// Start from this policy or checkpoint (e.g. the previous stage's policy.safetensors).
+    #[arg(long, value_name = "FILE")]
+    pub init_from: Option<PathBuf>,
+    /// Number of PPO iterations (replaces runner.iterations; with --resume, raises the target).
+    #[arg(long)]
+    pub iterations: Option<usize>,
+    /// Random seed (replaces runner.seed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Parallel environments (replaces runner.envs).
+    #[arg(long)]
+    pub envs: Option<usize>,
+}
+
+pub fn run(args: TrainArgs, model: Option<&Path>) -> Result<()> {
+    let overrides = Overrides { iterations: args.iterations, seed: args.seed, envs: args.envs };
+    let robot = crate::robot::load(model)?;
+    train_command(&robot, args.config.as_deref(), args.stage, &args.out, args.resume, args.init_from, overrides)
+}

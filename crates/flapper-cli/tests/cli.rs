@@ -25,6 +25,14 @@ fn assert_one_line_error(output: &Output, needle: &str) {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// An argument error as clap reports it: exit code 2, what is wrong, and the subcommand's usage.
+fn assert_usage_error(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.starts_with("error: ") && stderr.contains("Usage: flapper"), "{stderr}");
+    assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
+}
+
 #[test]
 fn fly_writes_csv_and_plots() {
     let out = scratch("fly");
@@ -163,7 +171,7 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
         &flapper(&["train", "--resume", "--iterations", "3", "--envs", "6", "--out", run.to_str().unwrap()]),
         "--envs 6 with --resume",
     );
-    assert_one_line_error(
+    assert_usage_error(
         &flapper(&["train", "--resume", "--iterations", "3", "--seed", "99", "--out", run.to_str().unwrap()]),
         "cannot be used with",
     );
@@ -279,9 +287,22 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
         "truncated.safetensors",
     );
     assert_one_line_error(
-        &flapper(&["eval", "--reference", "nowhere", "--episodes", "1"]),
+        &flapper(&["eval", "--baseline-only", "--reference", "nowhere", "--episodes", "1"]),
         "unknown reference 'nowhere'",
     );
+}
+
+#[test]
+fn argument_errors_show_clap_s_whole_message_and_eval_needs_a_policy() {
+    // A missing required flag is named, with the subcommand's usage.
+    assert_usage_error(&flapper(&["sysid", "--out", "x"]), "--policy <FILE>");
+    // An invalid value lists the valid ones and suggests the closest.
+    let stderr = String::from_utf8_lossy(&flapper(&["fly", "--controller", "glid"]).stderr).to_string();
+    assert!(stderr.contains("scripted, glide") && stderr.contains("'glide'"), "{stderr}");
+    let stderr = String::from_utf8_lossy(&flapper(&["evl"]).stderr).to_string();
+    assert!(stderr.contains("'eval'"), "did you mean: {stderr}");
+    // No silent baseline-only evaluation.
+    assert_one_line_error(&flapper(&["eval", "--episodes", "1"]), "--baseline-only");
 }
 
 fn shipped_policy(stage: &str) -> String {
@@ -393,12 +414,12 @@ fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
         (&["--sweeps", "fluid,gusts"][..], "gusts"),
         (&["--ranges", "0,1.5"][..], "1.5"),
         (&["--ranges", "NaN"][..], "NaN"),
-        (&["--episodes", "0"][..], "--episodes"),
         (&["--reference", "no-such-manoeuvre"][..], "no-such-manoeuvre"),
     ] {
         let base = ["robustness", "--policy", &policy, "--episodes", "1", "--out", o];
         assert_one_line_error(&flapper(&[&base[..], bad].concat()), needle);
     }
+    assert_one_line_error(&flapper(&["robustness", "--policy", &policy, "--episodes", "0", "--out", o]), "--episodes");
 }
 
 #[test]
