@@ -287,9 +287,15 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     };
     let network = |prefix: &str, sizes: &[usize]| -> Result<Mlp, CheckpointError> {
         let shape_error = || format(format!("{prefix} sizes {sizes:?} are not a network"));
-        let template =
-            Mlp::with_params(sizes, info.activation, vec![0.0; parameter_count(sizes).ok_or_else(shape_error)?])
-                .ok_or_else(shape_error)?;
+        let count = parameter_count(sizes).ok_or_else(shape_error)?;
+        // Sizes come from the file's metadata: never allocate more than the file could hold.
+        if count.saturating_mul(4) > bytes.len() {
+            return Err(format(format!(
+                "{prefix} declares {count} parameters, more than its {} bytes can hold",
+                bytes.len()
+            )));
+        }
+        let template = Mlp::with_params(sizes, info.activation, vec![0.0; count]).ok_or_else(shape_error)?;
         let mut params = vec![0.0; template.params().len()];
         for t in template.tensors() {
             let name = format!("{prefix}.{}", t.name);

@@ -199,3 +199,48 @@ fn policy_files_random_and_mutated() {
         .unwrap();
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `valid` with its flapper description's `key` replaced by `value` (the safetensors header rewritten).
+fn with_metadata(valid: &[u8], key: &str, value: serde_json::Value) -> Vec<u8> {
+    let header_len = u64::from_le_bytes(valid[..8].try_into().unwrap()) as usize;
+    let mut header: serde_json::Value = serde_json::from_slice(&valid[8..8 + header_len]).unwrap();
+    let metadata = header["__metadata__"].as_object_mut().unwrap();
+    let (name, text) = metadata.iter().next().map(|(k, v)| (k.clone(), v.as_str().unwrap().to_owned())).unwrap();
+    let mut info: serde_json::Value = serde_json::from_str(&text).unwrap();
+    info[key] = value;
+    metadata.insert(name, serde_json::Value::String(info.to_string()));
+    let mut json = serde_json::to_vec(&header).unwrap();
+    json.resize(json.len().next_multiple_of(8), b' ');
+    let mut bytes = (json.len() as u64).to_le_bytes().to_vec();
+    bytes.extend(json);
+    bytes.extend_from_slice(&valid[8 + header_len..]);
+    bytes
+}
+
+#[test]
+fn policy_metadata_declaring_enormous_networks_is_refused_without_allocating_them() {
+    let (valid, dir) = small_policy();
+    let path = dir.join("enormous.safetensors");
+    let layers = |n: usize, width: usize| serde_json::json!([vec![540], vec![width; n], vec![5]].concat());
+    for (key, value) in [
+        ("actor_sizes", layers(100_000, 256)),
+        ("actor_sizes", layers(3, 65_536)),
+        ("critic_sizes", layers(2_000, 65_536)),
+        ("observation_size", serde_json::json!(40_000_000_000u64)),
+        ("action_size", serde_json::json!(u64::MAX)),
+    ] {
+        let bytes = with_metadata(&valid, key, value);
+        std::fs::write(&path, &bytes).unwrap();
+        let error = load_flight_policy(&path).err().unwrap_or_else(|| panic!("{key}: loaded")).to_string();
+        assert!(error.contains("enormous.safetensors"), "{key}: {error}");
+    }
+    let mut runner = proptest::test_runner::TestRunner::new(cases());
+    let sizes = proptest::collection::vec(1usize..100_000, 0..3_000);
+    runner
+        .run(&(sizes, any::<bool>()), |(sizes, actor)| {
+            let key = if actor { "actor_sizes" } else { "critic_sizes" };
+            check_policy_file(&path, &with_metadata(&valid, key, serde_json::json!(sizes)))
+        })
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+}
