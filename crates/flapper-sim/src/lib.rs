@@ -10,6 +10,7 @@
 pub mod benchmark;
 mod error;
 mod geometry;
+mod mjcf_numbers;
 mod model;
 mod robot;
 mod simulator;

@@ -55,6 +55,7 @@ impl RobotModel {
         // Read it ourselves first: MuJoCo's message for a missing file is less clear than the OS's.
         let mjcf =
             std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_owned(), source })?;
+        refuse_non_finite(&mjcf, &origin)?;
         let model =
             MjModel::from_xml(path).map_err(|e| ModelError::Load { origin: origin.clone(), message: e.to_string() })?;
         Self::from_mujoco(model, origin, mjcf.into())
@@ -62,6 +63,7 @@ impl RobotModel {
 
     /// Loads MJCF text; `origin` names it in error messages.
     pub fn from_mjcf(mjcf: &str, origin: &str) -> Result<Self, ModelError> {
+        refuse_non_finite(mjcf, origin)?;
         let model = MjModel::from_xml_string(mjcf)
             .map_err(|e| ModelError::Load { origin: origin.to_owned(), message: e.to_string() })?;
         Self::from_mujoco(model, origin.to_owned(), mjcf.into())
@@ -178,6 +180,17 @@ impl RobotModel {
 /// needs several substeps per 20 ms), non-finite or non-positive masses and inertias, non-finite or
 /// negative damping, fluid coefficients, density and viscosity, joint ranges that are not finite or do
 /// not contain zero.
+/// A NaN or infinity in any numeric attribute, refused before MuJoCo reads the text.
+fn refuse_non_finite(mjcf: &str, origin: &str) -> Result<(), ModelError> {
+    match crate::mjcf_numbers::first_non_finite(mjcf) {
+        Some(found) => Err(ModelError::Unphysical {
+            origin: origin.to_owned(),
+            problem: format!("line {}: {}=\"{}\" is not a finite number", found.line, found.attribute, found.value),
+        }),
+        None => Ok(()),
+    }
+}
+
 fn check_physical(model: &MjModel, origin: &str) -> Result<(), ModelError> {
     let fail = |problem: String| Err(ModelError::Unphysical { origin: origin.to_owned(), problem });
     let timestep = model.opt().timestep;

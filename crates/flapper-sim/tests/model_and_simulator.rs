@@ -181,7 +181,10 @@ fn unphysical_numbers_in_a_model_are_refused_naming_them() {
         ("timestep=\"0.004\"", "timestep=\"1e300\"", "timestep 1e300 s"),
         ("density=\"1.225\"", "density=\"1e300\"", "density 1e300"),
         ("mass=\"0.226\"", "mass=\"1e300\"", "body 'main_body' has mass 1e300 kg"),
-        ("damping=\"0.002\"", "damping=\"nan\"", "damping NaN"),
+        ("damping=\"0.002\"", "damping=\"nan\"", "damping=\"nan\" is not a finite number"),
+        ("mass=\"0.226\"", "mass=\"NaN\"", "mass=\"NaN\" is not a finite number"),
+        ("mass=\"0.226\"", "mass=\"1e999\"", "mass=\"1e999\""),
+        ("kp=\"40\"", "kp=\"nan\"", "line 42: kp=\"nan\""),
         ("range=\"-60 60\"", "range=\"10 60\"", "must be finite and contain 0"),
     ] {
         let text = flapper_sim::ROBOT_MJCF.replacen(from, to, 1);
