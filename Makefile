@@ -42,7 +42,7 @@ test: mujoco lint
 python: mujoco
 	@test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(VENV)/bin/python -m pip install --quiet "./crates/flapper-py[test]"
+	$(VENV)/bin/python -m pip install --quiet "./crates/flapper-py[test,sweep]"
 
 python-bench: python
 	$(VENV)/bin/python crates/flapper-py/benchmarks/steps_per_second.py
