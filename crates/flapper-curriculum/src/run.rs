@@ -88,8 +88,9 @@ pub fn run_curriculum(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Vec<StageOutcome>, CurriculumError> {
     let dir = request.dir;
-    let config = open_folder(dir, &request.config)?;
+    std::fs::create_dir_all(dir).map_err(|e| CurriculumError::File { path: dir.to_owned(), message: e.to_string() })?;
     let _lock = lock(dir)?;
+    let config = open_folder(dir, &request.config)?;
     let last = request.until_stage.unwrap_or(config.stages.len()).clamp(1, config.stages.len());
     let mut outcomes: Vec<StageOutcome> = Vec::new();
     for number in 1..=last {
@@ -134,27 +135,19 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
         }
         return Ok(saved);
     }
-    if dir.read_dir().is_ok_and(|mut entries| entries.next().is_some()) {
+    if dir.read_dir().is_ok_and(|mut entries| entries.any(|e| e.is_ok_and(|e| e.file_name() != ".lock"))) {
         return Err(CurriculumError::NotACurriculum(dir.to_owned()));
     }
-    std::fs::create_dir_all(dir).map_err(|e| file(dir, &e))?;
     checkpoint::write_atomically(&saved_path, config.to_toml().as_bytes())?;
     Ok(config.clone())
 }
 
 /// The folder's lock (`.lock`, released by the OS when the process ends).
 fn lock(dir: &Path) -> Result<std::fs::File, CurriculumError> {
-    let path = dir.join(".lock");
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .map_err(|e| CurriculumError::File { path: path.clone(), message: e.to_string() })?;
-    match file.try_lock() {
-        Ok(()) => Ok(file),
-        Err(std::fs::TryLockError::WouldBlock) => Err(CurriculumError::Busy(dir.to_owned())),
-        Err(std::fs::TryLockError::Error(e)) => Err(CurriculumError::File { path, message: e.to_string() }),
+    match flapper_files::lock_folder(dir) {
+        Ok(Some(file)) => Ok(file),
+        Ok(None) => Err(CurriculumError::Busy(dir.to_owned())),
+        Err(e) => Err(CurriculumError::File { path: dir.join(".lock"), message: e.to_string() }),
     }
 }
 

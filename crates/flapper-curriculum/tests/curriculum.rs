@@ -129,6 +129,11 @@ fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
     assert_eq!(run(&inside, TINY, None).unwrap(), 2);
     same_run(&whole, &inside);
 
+    // A second process on the same folder is refused while the first holds it.
+    let held = flapper_files::lock_folder(&whole).unwrap().expect("nobody holds it now");
+    let e = run(&whole, TINY, None).unwrap_err();
+    assert!(e.contains("another process"), "{e}");
+    drop(held);
     // Another seed on the same folder is refused; so is a folder holding someone else's files.
     let e = run(&whole, &TINY.replace("seed = 5", "seed = 6"), None).unwrap_err();
     assert!(e.contains("seed"), "{e}");

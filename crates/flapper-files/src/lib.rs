@@ -22,6 +22,17 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// A folder's lock: `dir/.lock`, held until the returned file is dropped (the OS releases it when the
+/// process ends, however it ends). `Ok(None)` when another process holds it.
+pub fn lock_folder(dir: &Path) -> std::io::Result<Option<std::fs::File>> {
+    let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(dir.join(".lock"))?;
+    match file.try_lock() {
+        Ok(()) => Ok(Some(file)),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(None),
+        Err(std::fs::TryLockError::Error(e)) => Err(e),
+    }
+}
+
 /// Writes `header`, then one record per row, to `path` as CSV, whole or not at all. A row's field may
 /// hold several columns (an array: each joint's angle), which is why the header is given, not derived.
 pub fn write_csv_rows<R: serde::Serialize>(

@@ -120,17 +120,10 @@ pub type CheckpointHook = Box<dyn FnMut(&CheckpointEvent) -> Result<(), String> 
 
 /// Takes the run folder's lock (`dir/.lock`, released by the OS when the process ends).
 fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
-    let path = dir.join(".lock");
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .map_err(|e| TrainError::Output { path: path.clone(), message: e.to_string() })?;
-    match file.try_lock() {
-        Ok(()) => Ok(file),
-        Err(std::fs::TryLockError::WouldBlock) => Err(TrainError::Busy(dir.to_owned())),
-        Err(std::fs::TryLockError::Error(e)) => Err(TrainError::Output { path, message: e.to_string() }),
+    match flapper_files::lock_folder(dir) {
+        Ok(Some(file)) => Ok(file),
+        Ok(None) => Err(TrainError::Busy(dir.to_owned())),
+        Err(e) => Err(TrainError::Output { path: dir.join(".lock"), message: e.to_string() }),
     }
 }
 
