@@ -29,7 +29,12 @@ pub struct CurriculumArgs {
 
 pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
     let robot = &crate::robot::load(model)?;
-    let mut config = CurriculumConfig::load(&args.config)?;
+    let path = if args.config == Path::new(SHIPPED_CONFIG) {
+        flapper_report::shipped_file(SHIPPED_CONFIG)
+    } else {
+        args.config
+    };
+    let mut config = CurriculumConfig::load(&path)?;
     if let Some(seed) = args.seed {
         config.seed = seed;
     }

@@ -20,7 +20,7 @@ pub enum ControllerKind {
 
 pub fn fly_command(robot: &RobotModel, kind: ControllerKind, seconds: f64, tail_deg: f64, out: &Path) -> Result<()> {
     if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3600.0) {
-        bail!("--seconds must be between 0 and 3600, got {seconds}");
+        bail!("--seconds must be more than 0 and at most 3600, got {seconds}");
     }
     if !(-40.0..=40.0).contains(&tail_deg) {
         bail!("--tail-deg must be within the tail's range of -40..40 deg, got {tail_deg}");

@@ -65,7 +65,11 @@ pub struct ReportArgs {
 
 pub fn run(args: ReportArgs, model: Option<&Path>) -> Result<()> {
     let settings = ReportSettings {
-        policy: args.policy,
+        policy: if args.policy == Path::new(flapper_report::FINAL_POLICY) {
+            flapper_report::shipped_file(flapper_report::FINAL_POLICY)
+        } else {
+            args.policy
+        },
         episodes: args.episodes,
         robustness_episodes: args.robustness_episodes,
         seed: args.seed,

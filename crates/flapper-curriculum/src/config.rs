@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 #[derive(Debug, thiserror::Error)]
 pub enum CurriculumConfigError {
-    #[error("cannot read curriculum config '{path}': {source}")]
+    #[error("cannot read curriculum config '{path}'")]
     Read { path: String, source: std::io::Error },
     #[error("curriculum config '{origin}': {message}")]
     Parse { origin: String, message: String },

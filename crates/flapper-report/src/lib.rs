@@ -41,8 +41,8 @@ pub struct ReportSettings {
 impl Default for ReportSettings {
     fn default() -> Self {
         Self {
-            policy: PathBuf::from(FINAL_POLICY),
-            stage_policies: (1..=4).map(|k| PathBuf::from(format!("policies/stage{k}/policy.safetensors"))).collect(),
+            policy: shipped_file(FINAL_POLICY),
+            stage_policies: (1..=4).map(|k| shipped_file(&format!("policies/stage{k}/policy.safetensors"))).collect(),
             episodes: 100,
             robustness_episodes: 50,
             seed: 1,
@@ -224,3 +224,15 @@ pub fn render_flight(
 
 /// The final shipped controller, the report's default.
 pub const FINAL_POLICY: &str = "policies/stage4/policy.safetensors";
+
+/// A file shipped in the repository (a policy, a config) by its path from the repository's root: found
+/// from the current folder, or, when the program runs elsewhere, in the repository it was built from;
+/// otherwise the path as given, so that the error names it.
+pub fn shipped_file(relative: &str) -> PathBuf {
+    let here = PathBuf::from(relative);
+    let built_from = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(relative);
+    match built_from.canonicalize() {
+        Ok(found) if !here.exists() => found,
+        _ => here,
+    }
+}
