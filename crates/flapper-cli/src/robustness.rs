@@ -22,12 +22,10 @@ pub struct RobustnessRequest<'a> {
     pub out: &'a Path,
 }
 
-pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result<()> {
-    if args.episodes == 0 || args.episodes > 100_000 {
-        bail!("--episodes must be 1 to 100000, got {}", args.episodes);
-    }
+/// The sweeps named in --sweeps, each once, in the order given.
+fn parse_sweeps(names: &[String]) -> Result<Vec<Sweep>> {
     let mut sweeps = Vec::new();
-    for name in args.sweeps {
+    for name in names {
         let Some(sweep) = Sweep::parse(name) else {
             let known: Vec<&str> = Sweep::ALL.iter().map(|s| s.name()).collect();
             bail!("unknown sweep '{name}' in --sweeps (known: {})", known.join(", "));
@@ -36,7 +34,10 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result
             sweeps.push(sweep);
         }
     }
-    let ranges = args.ranges.unwrap_or(&PAPER_RANGES);
+    Ok(sweeps)
+}
+
+fn check_ranges(ranges: &[f64]) -> Result<()> {
     if let Some(bad) = ranges.iter().find(|r| !(r.is_finite() && (0.0..=MAX_RANGE).contains(*r))) {
         bail!(
             "--ranges: each range must be in [0, {MAX_RANGE}] (coefficients drawn from [1 - r, 1 + r] x nominal), got {bad}"
@@ -45,6 +46,16 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result
     if ranges.is_empty() || ranges.len() > 100 {
         bail!("--ranges: give 1 to 100 ranges, got {}", ranges.len());
     }
+    Ok(())
+}
+
+pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result<()> {
+    if args.episodes == 0 || args.episodes > 100_000 {
+        bail!("--episodes must be 1 to 100000, got {}", args.episodes);
+    }
+    let sweeps = parse_sweeps(args.sweeps)?;
+    let ranges = args.ranges.unwrap_or(&PAPER_RANGES);
+    check_ranges(ranges)?;
     let (policy, task) = load_flight_policy(args.policy)?;
     let reference = Arc::new(flapper_task::reference::resolve(
         args.reference,

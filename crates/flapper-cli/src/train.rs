@@ -126,20 +126,28 @@ pub fn train_command(
         true
     })?;
     bar.finish_and_clear();
-    let last = trainer.history().last();
+    print_session_summary(trainer.iteration(), trainer.env_steps(), trainer.history(), samples);
+    for file in ["policy.safetensors", "training.csv", "learning_curves.svg"] {
+        println!("wrote {}", out.join(file).display());
+    }
+    Ok(())
+}
+
+/// What this session trained: iterations, steps, wall time, and where the time went.
+fn print_session_summary(iteration: usize, env_steps: u64, history: &[IterationLog], samples: u64) {
+    let last = history.last();
     println!(
         "done: {} iterations, {} environment steps{}",
-        trainer.iteration(),
-        trainer.env_steps(),
+        iteration,
+        env_steps,
         last.map_or(String::new(), |l| format!(", {:.0} s training wall time", l.wall_time_s))
     );
-    let timing: (f64, f64, f64) = trainer
-        .history()
+    let timing: (f64, f64, f64) = history
         .iter()
         .fold((0.0, 0.0, 0.0), |t, l| (t.0 + l.env_time_s, t.1 + l.inference_time_s, t.2 + l.update_time_s));
     let sum = timing.0 + timing.1 + timing.2;
     if sum > 0.0 {
-        let steps = trainer.history().len() as f64 * samples as f64;
+        let steps = history.len() as f64 * samples as f64;
         println!(
             "  this session: {:.0} environment steps/s; time in environments {:.0}%, inference {:.0}%, update {:.0}%",
             steps / sum,
@@ -148,10 +156,6 @@ pub fn train_command(
             100.0 * timing.2 / sum
         );
     }
-    for file in ["policy.safetensors", "training.csv", "learning_curves.svg"] {
-        println!("wrote {}", out.join(file).display());
-    }
-    Ok(())
 }
 
 pub fn pendulum_command(seeds: &[u64], max_iterations: usize, out: &Path) -> Result<()> {

@@ -344,7 +344,20 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     if info.kind == CheckpointKind::Checkpoint && info.rng.as_ref().and_then(RngState::restore).is_none() {
         return Err(format("checkpoint without a valid random state".into()));
     }
-    // Values a trained policy cannot hold: a file with them would fly or train on garbage.
+    let environments = match tensors.tensor(ENVIRONMENTS_TENSOR) {
+        Ok(view) if view.dtype() == Dtype::U8 => Some(view.data().to_vec()),
+        Ok(view) => return Err(format(format!("tensor '{ENVIRONMENTS_TENSOR}' is {:?}, expected U8", view.dtype()))),
+        Err(_) => None,
+    };
+    let policy = ActorCritic { actor, critic, log_std, normalizer };
+    check_values(path, &policy, optimizer.as_ref())?;
+    Ok(Checkpoint { info, policy, optimizer, environments })
+}
+
+/// Refuses values a trained policy cannot hold: a file with them would fly or train on garbage.
+fn check_values(path: &Path, policy: &ActorCritic, optimizer: Option<&Optimizer>) -> Result<(), CheckpointError> {
+    let format = |message: String| CheckpointError::Format { path: path.to_owned(), message };
+    let ActorCritic { actor, critic, log_std, normalizer } = policy;
     fn first_non_finite<T: Copy + Into<f64>>(values: &[T]) -> Option<usize> {
         values.iter().position(|&v| !v.into().is_finite())
     }
@@ -354,7 +367,7 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     };
     non_finite("actor", first_non_finite(actor.params()))?;
     non_finite("critic", first_non_finite(critic.params()))?;
-    non_finite("actor.log_std", first_non_finite(&log_std))?;
+    non_finite("actor.log_std", first_non_finite(log_std))?;
     if let Some(s) = log_std.iter().find(|s| !(-20.0..=5.0).contains(*s)) {
         return Err(format(format!("tensor 'actor.log_std' holds {s} (an action noise std outside [2e-9, 148])")));
     }
@@ -369,7 +382,7 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
             normalizer.count
         )));
     }
-    if let Some(o) = &optimizer {
+    if let Some(o) = optimizer {
         for (name, adam) in [("actor", &o.actor), ("critic", &o.critic), ("log_std", &o.log_std)] {
             non_finite(&format!("optimizer.{name}.exp_avg"), first_non_finite(&adam.first_moment))?;
             non_finite(&format!("optimizer.{name}.exp_avg_sq"), first_non_finite(&adam.second_moment))?;
@@ -378,12 +391,7 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
             }
         }
     }
-    let environments = match tensors.tensor(ENVIRONMENTS_TENSOR) {
-        Ok(view) if view.dtype() == Dtype::U8 => Some(view.data().to_vec()),
-        Ok(view) => return Err(format(format!("tensor '{ENVIRONMENTS_TENSOR}' is {:?}, expected U8", view.dtype()))),
-        Err(_) => None,
-    };
-    Ok(Checkpoint { info, policy: ActorCritic { actor, critic, log_std, normalizer }, optimizer, environments })
+    Ok(())
 }
 
 fn parameter_count(sizes: &[usize]) -> Option<usize> {
