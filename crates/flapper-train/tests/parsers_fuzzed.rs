@@ -144,9 +144,10 @@ proptest! {
     }
 }
 
-/// A small flight policy (16 hidden units) from one training iteration, and a scratch folder.
-fn small_policy() -> (Vec<u8>, PathBuf) {
-    let dir = std::env::temp_dir().join(format!("flapper-fuzz-{}", std::process::id()));
+/// A small flight policy (16 hidden units) from one training iteration, and a scratch folder named by `label`.
+fn small_policy(label: &str) -> (Vec<u8>, PathBuf) {
+    // A folder per test: tests run side by side in one process.
+    let dir = std::env::temp_dir().join(format!("flapper-fuzz-{label}-{}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
     let config = TrainConfig::from_toml(
         "[runner]\nenvs = 2\niterations = 1\nthreads = 1\n[ppo]\nsteps_per_env = 4\nminibatches = 1\nepochs = 1\n\
@@ -175,7 +176,7 @@ fn check_policy_file(path: &Path, bytes: &[u8]) -> Result<(), TestCaseError> {
 
 #[test]
 fn policy_files_random_and_mutated() {
-    let (valid, dir) = small_policy();
+    let (valid, dir) = small_policy("mutated");
     let path = dir.join("fuzz-policy.safetensors");
     check_policy_file(&path, &valid).unwrap();
     assert!(load_flight_policy(&path).is_ok(), "the unmutated file loads");
@@ -219,7 +220,7 @@ fn with_metadata(valid: &[u8], key: &str, value: serde_json::Value) -> Vec<u8> {
 
 #[test]
 fn policy_metadata_declaring_enormous_networks_is_refused_without_allocating_them() {
-    let (valid, dir) = small_policy();
+    let (valid, dir) = small_policy("enormous");
     let path = dir.join("enormous.safetensors");
     let layers = |n: usize, width: usize| serde_json::json!([vec![540], vec![width; n], vec![5]].concat());
     for (key, value) in [
