@@ -35,6 +35,7 @@ pub fn bench_command(
     );
     println!("  control step   median {:.2} us  (5 substeps = 20 ms simulated)", t.median_us_per_control_step);
     println!("  real-time factor {:.0}x", 20_000.0 / t.median_us_per_control_step);
+    let mut environments_only_steps_per_s = None;
     if envs > 0 {
         let env_blocks = blocks.clamp(1, 7);
         let v = flapper_task::benchmark::time_vec_env(robot, envs, threads, env_blocks, 50)?;
@@ -49,6 +50,7 @@ pub fn bench_command(
         );
         println!("  raw MuJoCo bound     {raw:.0} control steps/s ({} threads x one-thread control step)", v.threads);
         println!("  efficiency           {:.0}% of the bound", 100.0 * v.median_steps_per_s / raw);
+        environments_only_steps_per_s = Some(v.median_steps_per_s);
     }
     let threads = flapper_ppo::config::threads_or_all_cores(threads);
     // The paper's network update: its observation, its 256 environments x 24 steps, 5 epochs of 4
@@ -101,6 +103,13 @@ pub fn bench_command(
             100.0 * t.inference_fraction,
             100.0 * t.update_fraction
         );
+        if let Some(alone) = environments_only_steps_per_s {
+            println!(
+                "  training / environments alone  {:.2}  ({:.0} / {alone:.0} steps/s, this run)",
+                t.median_steps_per_s / alone,
+                t.median_steps_per_s
+            );
+        }
     }
     Ok(())
 }
