@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use flapper_ppo::checkpoint::{self, CheckpointError};
-use flapper_ppo::runner::{checkpoint_dir, latest_checkpoint};
+use flapper_ppo::runner::{checkpoint_dir, saved_checkpoints};
 use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
@@ -176,8 +176,8 @@ fn run_stage(
     let selection_path = here.join("selection.csv");
     let mut selection = Selection::read(&selection_path, &names)?;
 
-    let resumed_at =
-        latest_checkpoint(&here).map(|path| checkpoint::load(&path).map(|c| c.info.iteration)).transpose()?;
+    let saved = saved_checkpoints(&here);
+    let resumed_at = saved.last().map(|(iteration, _)| *iteration);
     // Done training: the final policy is written, or the budget is spent, or the gate was met before
     // the last checkpoint (the run stops one iteration after the validation that meets it).
     let finished = here.join("policy.safetensors").exists()
@@ -185,7 +185,7 @@ fn run_stage(
     // Judge what is saved but not judged (an interruption between a checkpoint and its validation);
     // rows after the last checkpoint belong to iterations the resumed run will do again.
     selection.truncate_after(resumed_at.unwrap_or(0));
-    for (iteration, path) in saved_checkpoints(&here) {
+    for (iteration, path) in saved {
         if !selection.has(iteration) {
             let began = Instant::now();
             let score = set.judge(robot, &path)?;
@@ -243,21 +243,6 @@ fn run_stage(
         selection = state.0.clone();
     }
     select(stage, number, &here, &selection)
-}
-
-/// The stage's checkpoints on disk, by iteration.
-fn saved_checkpoints(here: &Path) -> Vec<(usize, PathBuf)> {
-    let Ok(entries) = std::fs::read_dir(checkpoint_dir(here)) else { return Vec::new() };
-    let mut found: Vec<(usize, PathBuf)> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter_map(|p| {
-            let name = p.file_name()?.to_str()?;
-            let number = name.strip_prefix("iter_")?.strip_suffix(".safetensors")?.parse().ok()?;
-            Some((number, p))
-        })
-        .collect();
-    found.sort();
-    found
 }
 
 /// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate.

@@ -136,18 +136,24 @@ pub fn checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoints")
 }
 
-/// The newest `iter_NNNNNN.safetensors` in the run's checkpoint folder.
-pub fn latest_checkpoint(dir: &Path) -> Option<PathBuf> {
-    let entries = std::fs::read_dir(checkpoint_dir(dir)).ok()?;
-    entries
+/// Every `iter_NNNNNN.safetensors` in the run's checkpoint folder with its iteration, oldest first.
+pub fn saved_checkpoints(dir: &Path) -> Vec<(usize, PathBuf)> {
+    let Ok(entries) = std::fs::read_dir(checkpoint_dir(dir)) else { return Vec::new() };
+    let mut found: Vec<(usize, PathBuf)> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter_map(|p| {
             let name = p.file_name()?.to_str()?;
             let number: usize = name.strip_prefix("iter_")?.strip_suffix(".safetensors")?.parse().ok()?;
             Some((number, p))
         })
-        .max_by_key(|(n, _)| *n)
-        .map(|(_, p)| p)
+        .collect();
+    found.sort();
+    found
+}
+
+/// The newest `iter_NNNNNN.safetensors` in the run's checkpoint folder.
+pub fn latest_checkpoint(dir: &Path) -> Option<PathBuf> {
+    saved_checkpoints(dir).pop().map(|(_, p)| p)
 }
 
 impl<E: VecEnv> Trainer<E> {
