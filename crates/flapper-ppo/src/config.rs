@@ -21,7 +21,7 @@ pub enum Schedule {
     /// Fixed at `learning_rate`.
     Fixed,
     /// Divided by 1.5 when the KL of a minibatch exceeds 2 `desired_kl`, multiplied by 1.5 when
-    /// below half of it, within [1e-5, 1e-2].
+    /// below half of it, within [`crate::ppo::LEARNING_RATE_RANGE`] ([`crate::ppo::adapted_learning_rate`]).
     Adaptive,
 }
 

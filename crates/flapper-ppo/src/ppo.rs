@@ -39,6 +39,25 @@ pub struct UpdateStats {
     pub action_std: f64,
 }
 
+/// The adaptive schedule's bounds on the learning rate (rsl_rl's).
+pub const LEARNING_RATE_RANGE: (f32, f32) = (1e-5, 1e-2);
+
+/// The adaptive schedule's step (rsl_rl's): the learning rate after a minibatch whose policy moved by
+/// `kl` against the target `desired_kl`: divided by 1.5 above twice the target, multiplied by 1.5
+/// below half of it (a KL of exactly zero says nothing and changes nothing), kept within
+/// [`LEARNING_RATE_RANGE`].
+pub fn adapted_learning_rate(learning_rate: f32, kl: f64, desired_kl: f32) -> f32 {
+    let target = desired_kl as f64;
+    let (lowest, highest) = LEARNING_RATE_RANGE;
+    if kl > 2.0 * target {
+        (learning_rate / 1.5).max(lowest)
+    } else if kl < 0.5 * target && kl > 0.0 {
+        (learning_rate * 1.5).min(highest)
+    } else {
+        learning_rate
+    }
+}
+
 /// The learner: policy, optimizer, learning rate, random stream and rollout storage.
 pub struct Ppo {
     pub config: PpoConfig,
@@ -199,12 +218,7 @@ impl Ppo {
                     self.threads,
                 );
                 if self.config.schedule == Schedule::Adaptive {
-                    let target = self.config.desired_kl as f64;
-                    if terms.kl > 2.0 * target {
-                        self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
-                    } else if terms.kl < 0.5 * target && terms.kl > 0.0 {
-                        self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
-                    }
+                    self.learning_rate = adapted_learning_rate(self.learning_rate, terms.kl, self.config.desired_kl);
                 }
                 let norm = self.grads.clip_global_norm(self.config.max_grad_norm);
                 let o = &mut self.optimizer;
@@ -260,5 +274,94 @@ impl Ppo {
             mb.returns.push(s.returns[i]);
         }
         mb.old_log_std.clone_from(&self.rollout_log_std);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+
+    use super::*;
+
+    #[test]
+    fn the_learning_rate_falls_above_twice_the_target_kl_and_rises_below_half_of_it() {
+        let target = 0.01;
+        assert_eq!(adapted_learning_rate(3e-4, 0.021, target), 3e-4 / 1.5);
+        assert_eq!(adapted_learning_rate(3e-4, 0.004, target), 3e-4 * 1.5);
+        for inside in [0.0051, 0.01, 0.0199] {
+            assert_eq!(adapted_learning_rate(3e-4, inside, target), 3e-4, "kl {inside} is within [target/2, 2 target]");
+        }
+        assert_eq!(adapted_learning_rate(3e-4, 0.0, target), 3e-4, "a zero KL (no policy change) moves nothing");
+    }
+
+    #[test]
+    fn the_learning_rate_stays_within_its_range() {
+        let (lowest, highest) = LEARNING_RATE_RANGE;
+        assert_eq!(adapted_learning_rate(1.2e-5, 1.0, 0.01), lowest);
+        assert_eq!(adapted_learning_rate(lowest, 1.0, 0.01), lowest);
+        assert_eq!(adapted_learning_rate(8e-3, 1e-9, 0.01), highest);
+        let mut rate = 1e-3;
+        for _ in 0..100 {
+            rate = adapted_learning_rate(rate, 1.0, 0.01);
+        }
+        assert_eq!(rate, lowest, "a KL that stays high pins the rate at the floor");
+    }
+
+    /// A learner over `envs` environments of 3 observations and 2 actions, one step per rollout.
+    fn tiny_learner(envs: usize, schedule: Schedule) -> Ppo {
+        let config = PpoConfig {
+            steps_per_env: 1,
+            minibatches: 1,
+            epochs: 1,
+            actor_hidden: vec![4],
+            critic_hidden: vec![4],
+            schedule,
+            ..PpoConfig::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let policy = ActorCritic::new(3, 2, &config, &mut rng);
+        Ppo::new(policy, config, envs, rng, 1)
+    }
+
+    #[test]
+    fn a_truncated_episode_is_bootstrapped_with_the_value_of_its_final_observation() {
+        let mut ppo = tiny_learner(3, Schedule::Adaptive);
+        let observations = [0.1, -0.2, 0.3, 1.0, 0.5, -0.5, -1.0, 0.0, 2.0];
+        let mut actions = [0.0; 6];
+        ppo.act(&observations, &mut actions);
+        // Environment 0 was cut by the time limit, 1 crashed, 2 crashed on its last allowed step.
+        let final_observations = [0.4, 0.4, -0.3, 9.0, 9.0, 9.0, 7.0, 7.0, 7.0];
+        ppo.process_step(&[1.0, 1.0, 1.0], &[false, true, true], &[true, false, true], &final_observations);
+
+        let mut normalized = Vec::new();
+        ppo.policy.normalizer.normalize(&final_observations[..3], &mut normalized);
+        let value = ppo.policy.critic.forward(&normalized, 1, &mut Workspace::default(), 1)[0];
+        assert!(value.abs() > 1e-4, "the test needs a critic that does not answer zero, got {value}");
+        let rewards = &ppo.storage.rewards;
+        assert!((rewards[0] - (1.0 + ppo.config.gamma * value)).abs() < 1e-6, "{} vs value {value}", rewards[0]);
+        assert_eq!(rewards[1], 1.0, "a terminated episode has no future to bootstrap");
+        assert_eq!(rewards[2], 1.0, "terminated wins over truncated");
+        assert_eq!(ppo.storage.dones, [true, true, true]);
+    }
+
+    #[test]
+    fn an_update_applies_the_schedule_only_when_adaptive() {
+        for schedule in [Schedule::Adaptive, Schedule::Fixed] {
+            let mut ppo = tiny_learner(8, schedule);
+            let observations: Vec<f32> = (0..24).map(|k| (k as f32 * 0.37).sin()).collect();
+            let mut actions = vec![0.0; 16];
+            ppo.act(&observations, &mut actions);
+            let rewards: Vec<f32> = (0..8).map(|k| k as f32 - 3.5).collect();
+            ppo.process_step(&rewards, &[false; 8], &[false; 8], &observations);
+            ppo.finish_rollout(&observations);
+            let stats = ppo.update();
+            let expected = match schedule {
+                // One minibatch: the rate moves at most one step of 1.5 from its start.
+                Schedule::Adaptive => adapted_learning_rate(ppo.config.learning_rate, stats.kl, ppo.config.desired_kl),
+                Schedule::Fixed => ppo.config.learning_rate,
+            };
+            assert_eq!(ppo.learning_rate, expected, "{schedule:?}: kl {}", stats.kl);
+            assert!(ppo.storage.step() == 0, "the update clears the rollout");
+        }
     }
 }
