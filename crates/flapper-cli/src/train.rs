@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use flapper_ppo::{IterationLog, Start};
+use flapper_ppo::{IterationLog, Start, TrainError};
 use flapper_sim::RobotModel;
 use flapper_train::TrainConfig;
-use flapper_train::run::{flight_trainer, saved_config, solve_inverted_pendulum};
+use flapper_train::run::{RunError, flight_trainer, saved_config, solve_inverted_pendulum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Command-line values that replace the config's.
@@ -65,7 +65,7 @@ pub fn train_command(
         (false, Some(path)) => Start::InitFrom(path),
         (false, None) => Start::Fresh,
     };
-    let mut trainer = flight_trainer(robot, &config, out, start)?;
+    let mut trainer = flight_trainer(robot, &config, out, start).map_err(with_flag_hint)?;
     let total = config.runner.iterations as u64;
     let samples = (config.runner.envs * config.ppo.steps_per_env) as u64;
     let ends = trainer.end_reasons().to_vec();
@@ -236,4 +236,16 @@ pub fn run(args: TrainArgs, model: Option<&Path>) -> Result<()> {
     let overrides = Overrides { iterations: args.iterations, seed: args.seed, envs: args.envs };
     let robot = crate::robot::load(model)?;
     train_command(&robot, args.config.as_deref(), args.stage, &args.out, args.resume, args.init_from, overrides)
+}
+
+/// The learner's errors describe the problem; here they also name the flag that answers it.
+fn with_flag_hint(error: RunError) -> anyhow::Error {
+    let hint = match &error {
+        RunError::Train(TrainError::RunExists(_)) => "pass --resume to continue it, or choose another --out",
+        RunError::Train(TrainError::Busy(_)) => "or pass another --out",
+        RunError::Train(TrainError::NoEnvironmentState(_)) => "pass it to --init-from of a new run",
+        RunError::Train(TrainError::AlreadyDone { .. }) => "pass a larger --iterations with --resume",
+        _ => return error.into(),
+    };
+    anyhow::anyhow!("{error} ({hint})")
 }

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use flapper_ppo::checkpoint::{self, CheckpointError};
-use flapper_ppo::runner::{checkpoint_dir, saved_checkpoints};
+use flapper_ppo::run_folder::{checkpoint_path, saved_checkpoints};
 use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
@@ -216,7 +216,7 @@ fn run_stage(
         let hook_state = shared.clone();
         let (hook_robot, hook_names, hook_path) = (robot.clone(), names.clone(), selection_path.clone());
         trainer.add_checkpoint_hook(Box::new(move |event| {
-            let path = checkpoint_dir(event.dir).join(format!("iter_{:06}.safetensors", event.iteration));
+            let path = checkpoint_path(event.dir, event.iteration);
             let began = Instant::now();
             let score = set.judge(&hook_robot, &path).map_err(|e| e.to_string())?;
             let env_steps = event.history.last().map_or(0, |l| l.env_steps);

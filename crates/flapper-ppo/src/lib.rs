@@ -8,8 +8,9 @@
 //! - `storage`: the rollout and its generalized advantages;
 //! - `ppo`: acting, bootstrapping truncated episodes, the update (`loss`: the clipped loss and its
 //!   gradients), `adam`;
-//! - `runner`: iterations, `training_log` (the CSV), `checkpoint`s, checkpoint hooks; `config`: every
-//!   setting, rsl_rl's defaults. Nothing here draws: the training crate plots learning curves.
+//! - `runner`: iterations, `training_log` (the CSV), `checkpoint`s, checkpoint hooks, in a
+//!   `run_folder` (its files, its lock, what a new run refuses); `config`: every setting, rsl_rl's
+//!   defaults. Nothing here draws: the training crate plots learning curves.
 
 pub mod actor_critic;
 pub mod adam;
@@ -24,6 +25,7 @@ pub mod matmul;
 pub mod mlp;
 pub mod normalizer;
 pub mod ppo;
+pub mod run_folder;
 pub mod runner;
 pub mod storage;
 pub mod training_log;

@@ -1,11 +1,7 @@
 //! The on-policy runner (rsl_rl's `OnPolicyRunner`): collect a rollout from the vectorized
 //! environments, update, log one CSV row (`training_log`), save checkpoints and call the checkpoint
 //! hooks (the training crate draws learning curves there); start fresh, resume a run, or start from
-//! another run's policy.
-//!
-//! Run folder: `config.toml` (the full config), `training.csv` (one row per iteration),
-//! `checkpoints/iter_NNNNNN.safetensors` (+ `.json`), and at the end `policy.safetensors` (+ `.json`);
-//! `learning_curves.svg` from the training crate's hook.
+//! another run's policy. The folder it writes is `run_folder`'s.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -17,6 +13,7 @@ use crate::actor_critic::ActorCritic;
 use crate::checkpoint::{self, CheckpointError, CheckpointKind};
 use crate::config::{PpoConfig, RunnerConfig};
 use crate::ppo::{Ppo, UpdateStats};
+use crate::run_folder::RunFolder;
 use crate::training_log;
 use crate::vec_env::{EndReason, EnvError, VecEnv};
 
@@ -26,7 +23,7 @@ pub enum TrainError {
     Checkpoint(#[from] CheckpointError),
     #[error("environment: {0}")]
     Env(EnvError),
-    #[error("'{0}' already holds a training run; pass --resume to continue it or choose another --out")]
+    #[error("'{0}' already holds a training run; resume it, or train into another folder")]
     RunExists(PathBuf),
     #[error(
         "'{dir}' already holds {file}, which a new run would overwrite; give --out a new or empty folder (or move the file)"
@@ -37,7 +34,7 @@ pub enum TrainError {
     )]
     DamagedLog { path: PathBuf, problem: String },
     #[error(
-        "another flapper train is using '{0}' (its lock file .lock is held); wait for it to end or use another --out"
+        "another training process is using '{0}' (it holds the folder's lock file .lock); wait for it to end or train into another folder"
     )]
     Busy(PathBuf),
     #[error("'{0}' has no checkpoint to resume from (checkpoints/iter_*.safetensors)")]
@@ -45,7 +42,7 @@ pub enum TrainError {
     #[error("cannot write '{path}': {message}")]
     Output { path: PathBuf, message: String },
     #[error(
-        "'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run with --init-from on it instead"
+        "'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run from its policy instead"
     )]
     NoEnvironmentState(PathBuf),
     #[error(
@@ -94,7 +91,8 @@ pub struct Trainer<E: VecEnv> {
     ppo: Ppo,
     runner: RunnerConfig,
     config_toml: String,
-    dir: PathBuf,
+    /// The run's folder, locked while the trainer lives so that no second trainer writes into it.
+    folder: RunFolder,
     iteration: usize,
     env_steps: u64,
     wall_time_before_s: f64,
@@ -102,8 +100,6 @@ pub struct Trainer<E: VecEnv> {
     end_reasons: Vec<&'static str>,
     diagnostic_names: Vec<String>,
     checkpoint_hooks: Vec<CheckpointHook>,
-    /// Held while the run lives, so that no second trainer writes into the same folder.
-    _run_lock: std::fs::File,
 }
 
 /// What a checkpoint hook sees: the run folder (its `training.csv` is complete up to `iteration`),
@@ -118,44 +114,6 @@ pub struct CheckpointEvent<'a> {
 /// Called after each checkpoint is saved (e.g. to draw learning curves: the learner draws nothing).
 pub type CheckpointHook = Box<dyn FnMut(&CheckpointEvent) -> Result<(), String> + Send>;
 
-/// Takes the run folder's lock (`dir/.lock`, released by the OS when the process ends).
-fn lock_run(dir: &Path) -> Result<std::fs::File, TrainError> {
-    match flapper_files::lock_folder(dir) {
-        Ok(Some(file)) => Ok(file),
-        Ok(None) => Err(TrainError::Busy(dir.to_owned())),
-        Err(e) => Err(TrainError::Output { path: dir.join(".lock"), message: e.to_string() }),
-    }
-}
-
-/// The files a run writes in its folder besides the checkpoints: a new run refuses a
-/// folder that holds any of them, so it never overwrites a user's own file.
-pub const RUN_FILES: [&str; 5] =
-    ["config.toml", "policy.safetensors", "policy.safetensors.json", "learning_curves.svg", "training.csv"];
-
-pub fn checkpoint_dir(dir: &Path) -> PathBuf {
-    dir.join("checkpoints")
-}
-
-/// Every `iter_NNNNNN.safetensors` in the run's checkpoint folder with its iteration, oldest first.
-pub fn saved_checkpoints(dir: &Path) -> Vec<(usize, PathBuf)> {
-    let Ok(entries) = std::fs::read_dir(checkpoint_dir(dir)) else { return Vec::new() };
-    let mut found: Vec<(usize, PathBuf)> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter_map(|p| {
-            let name = p.file_name()?.to_str()?;
-            let number: usize = name.strip_prefix("iter_")?.strip_suffix(".safetensors")?.parse().ok()?;
-            Some((number, p))
-        })
-        .collect();
-    found.sort();
-    found
-}
-
-/// The newest `iter_NNNNNN.safetensors` in the run's checkpoint folder.
-pub fn latest_checkpoint(dir: &Path) -> Option<PathBuf> {
-    saved_checkpoints(dir).pop().map(|(_, p)| p)
-}
-
 impl<E: VecEnv> Trainer<E> {
     /// Prepares a run in `dir`. For `Start::Resume` the caller passes the config the run was started
     /// with (`config.toml` in the folder; `runner.iterations` may be raised).
@@ -167,82 +125,39 @@ impl<E: VecEnv> Trainer<E> {
         dir: &Path,
         start: Start,
     ) -> Result<Self, TrainError> {
-        let threads = runner.thread_count();
         let (o, a) = (env.observation_size(), env.action_size());
-        let mut rng = ChaCha8Rng::seed_from_u64(runner.seed);
-        let output = |path: &Path, e: &dyn std::fmt::Display| TrainError::Output {
-            path: path.to_owned(),
-            message: e.to_string(),
-        };
-        let (mut iteration, mut env_steps, mut wall_time_before_s) = (0, 0, 0.0);
-        let run_lock: std::fs::File;
-        let ppo = match &start {
-            Start::Fresh | Start::InitFrom(_) => {
-                if latest_checkpoint(dir).is_some() || dir.join("training.csv").exists() {
-                    return Err(TrainError::RunExists(dir.to_owned()));
-                }
-                if let Some(file) = RUN_FILES.into_iter().find(|file| dir.join(file).exists()) {
-                    return Err(TrainError::WouldOverwrite { dir: dir.to_owned(), file });
-                }
-                let loaded = match &start {
-                    Start::InitFrom(path) => {
-                        let loaded = checkpoint::load(path)?;
-                        loaded.check_layout(path, o, a)?;
-                        Some(loaded)
-                    }
-                    _ => None,
-                };
-                std::fs::create_dir_all(checkpoint_dir(dir)).map_err(|e| output(dir, &e))?;
-                run_lock = lock_run(dir)?;
-                // Again under the lock: another trainer may have started here since the check above
-                // (which keeps a refused start from creating the folder and its lock file).
-                if dir.join("training.csv").exists() {
-                    return Err(TrainError::RunExists(dir.to_owned()));
-                }
-                checkpoint::write_atomically(&dir.join("config.toml"), config_toml.as_bytes())?;
-                match loaded {
-                    Some(loaded) => {
-                        // A trained policy is sharp (small action noise): a fresh Adam at the
-                        // initial step size moves it far in the first update (the stage-2 run saw a
-                        // KL of 75). Continue at the step size the source run ended with, and with
-                        // its Adam moments when the file is a checkpoint that holds them.
-                        let mut ppo = Ppo::new(loaded.policy, ppo_config, runner.envs, rng, threads);
-                        if ppo.config.schedule == crate::config::Schedule::Adaptive {
-                            ppo.learning_rate = loaded.info.learning_rate;
-                        }
-                        if let Some(optimizer) = loaded.optimizer {
-                            ppo.optimizer = optimizer;
-                        }
-                        if let Some(std) = runner.init_from_noise_std {
-                            ppo.policy.log_std.iter_mut().for_each(|s| *s = std.ln());
-                        }
-                        ppo
-                    }
-                    None => {
-                        Ppo::new(ActorCritic::new(o, a, &ppo_config, &mut rng), ppo_config, runner.envs, rng, threads)
-                    }
-                }
+        let mut progress = Progress::default();
+        let (folder, ppo) = match &start {
+            Start::Fresh => {
+                let folder = RunFolder::create(dir, &config_toml)?;
+                let mut rng = ChaCha8Rng::seed_from_u64(runner.seed);
+                let policy = ActorCritic::new(o, a, &ppo_config, &mut rng);
+                (folder, Ppo::new(policy, ppo_config, runner.envs, rng, runner.thread_count()))
+            }
+            Start::InitFrom(source) => {
+                // The source is checked before the folder is made, so that a refused start leaves nothing.
+                RunFolder::check_new(dir)?;
+                let loaded = checkpoint::load(source)?;
+                loaded.check_layout(source, o, a)?;
+                let folder = RunFolder::create(dir, &config_toml)?;
+                (folder, learner_from(loaded, ppo_config, &runner))
             }
             Start::Resume => {
-                let path = latest_checkpoint(dir).ok_or_else(|| TrainError::NothingToResume(dir.to_owned()))?;
-                run_lock = lock_run(dir)?;
-                let loaded = checkpoint::load(&path)?;
-                loaded.check_layout(&path, o, a)?;
-                let rng = loaded.rng().expect("load() checked the random state");
-                let optimizer = loaded.optimizer.clone().expect("checkpoints hold the optimizer");
+                let (folder, newest) = RunFolder::open(dir)?;
+                let loaded = checkpoint::load(&newest)?;
+                loaded.check_layout(&newest, o, a)?;
                 if loaded.info.iteration >= runner.iterations {
                     return Err(TrainError::AlreadyDone { iterations: runner.iterations, done: loaded.info.iteration });
                 }
                 let environments =
-                    loaded.environments.as_deref().ok_or_else(|| TrainError::NoEnvironmentState(path.clone()))?;
+                    loaded.environments.as_deref().ok_or_else(|| TrainError::NoEnvironmentState(newest.clone()))?;
                 env.restore_state(environments).map_err(TrainError::Env)?;
-                iteration = loaded.info.iteration;
-                env_steps = loaded.info.env_steps;
-                wall_time_before_s = loaded.info.wall_time_s;
-                let mut ppo = Ppo::new(loaded.policy, ppo_config, runner.envs, rng, threads);
-                ppo.optimizer = optimizer;
-                ppo.learning_rate = loaded.info.learning_rate;
-                ppo
+                progress = Progress {
+                    iteration: loaded.info.iteration,
+                    env_steps: loaded.info.env_steps,
+                    wall_time_s: loaded.info.wall_time_s,
+                };
+                (folder, resumed_learner(loaded, ppo_config, &runner))
             }
         };
         let end_reasons = E::EndReason::ALL.iter().map(|r| r.name()).collect();
@@ -252,15 +167,14 @@ impl<E: VecEnv> Trainer<E> {
             ppo,
             runner,
             config_toml,
-            dir: dir.to_owned(),
-            iteration,
-            env_steps,
-            wall_time_before_s,
+            folder,
+            iteration: progress.iteration,
+            env_steps: progress.env_steps,
+            wall_time_before_s: progress.wall_time_s,
             history: Vec::new(),
             end_reasons,
             diagnostic_names,
             checkpoint_hooks: Vec::new(),
-            _run_lock: run_lock,
         };
         let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names);
         training_log::prepare(&trainer.csv_path(), &header, matches!(start, Start::Resume), trainer.iteration)?;
@@ -288,7 +202,7 @@ impl<E: VecEnv> Trainer<E> {
     }
 
     pub fn csv_path(&self) -> PathBuf {
-        self.dir.join("training.csv")
+        self.folder.training_csv()
     }
 
     pub fn end_reasons(&self) -> &[&'static str] {
@@ -371,7 +285,7 @@ impl<E: VecEnv> Trainer<E> {
                 self.run_checkpoint_hooks()?;
             }
             if last {
-                let path = self.dir.join("policy.safetensors");
+                let path = self.folder.policy();
                 let info = checkpoint::describe(
                     &self.ppo,
                     CheckpointKind::Policy,
@@ -388,7 +302,7 @@ impl<E: VecEnv> Trainer<E> {
     }
 
     fn save_checkpoint(&self, wall_time_s: f64) -> Result<(), TrainError> {
-        let path = checkpoint_dir(&self.dir).join(format!("iter_{:06}.safetensors", self.iteration));
+        let path = self.folder.checkpoint(self.iteration);
         let info = checkpoint::describe(
             &self.ppo,
             CheckpointKind::Checkpoint,
@@ -405,14 +319,52 @@ impl<E: VecEnv> Trainer<E> {
     /// Runs the checkpoint hooks (after a checkpoint is saved); a hook's error names the run folder.
     fn run_checkpoint_hooks(&mut self) -> Result<(), TrainError> {
         let event = CheckpointEvent {
-            dir: &self.dir,
+            dir: self.folder.dir(),
             iteration: self.iteration,
             history: &self.history,
             end_reasons: &self.end_reasons,
         };
         for hook in &mut self.checkpoint_hooks {
-            hook(&event).map_err(|message| TrainError::Output { path: self.dir.clone(), message })?;
+            hook(&event).map_err(|message| TrainError::Output { path: self.folder.dir().to_owned(), message })?;
         }
         Ok(())
     }
+}
+
+/// Where a run stands: zero for a new run, the checkpoint's figures for a resumed one.
+#[derive(Debug, Default)]
+struct Progress {
+    iteration: usize,
+    env_steps: u64,
+    wall_time_s: f64,
+}
+
+/// A new run's learner whose policy starts as another run's (a curriculum's next stage).
+fn learner_from(loaded: checkpoint::Checkpoint, ppo_config: PpoConfig, runner: &RunnerConfig) -> Ppo {
+    let rng = ChaCha8Rng::seed_from_u64(runner.seed);
+    let mut ppo = Ppo::new(loaded.policy, ppo_config, runner.envs, rng, runner.thread_count());
+    // A trained policy is sharp (small action noise): a fresh Adam at the initial step size moves it
+    // far in the first update (the stage-2 run saw a KL of 75). Continue at the step size the source
+    // run ended with, and with its Adam moments when the file is a checkpoint that holds them.
+    if ppo.config.schedule == crate::config::Schedule::Adaptive {
+        ppo.learning_rate = loaded.info.learning_rate;
+    }
+    if let Some(optimizer) = loaded.optimizer {
+        ppo.optimizer = optimizer;
+    }
+    if let Some(std) = runner.init_from_noise_std {
+        ppo.policy.log_std.iter_mut().for_each(|s| *s = std.ln());
+    }
+    ppo
+}
+
+/// The learner of a checkpoint, continued exactly: its policy, optimizer, learning rate and random
+/// stream.
+fn resumed_learner(loaded: checkpoint::Checkpoint, ppo_config: PpoConfig, runner: &RunnerConfig) -> Ppo {
+    let rng = loaded.rng().expect("load() checked the random state");
+    let optimizer = loaded.optimizer.expect("checkpoints hold the optimizer");
+    let mut ppo = Ppo::new(loaded.policy, ppo_config, runner.envs, rng, runner.thread_count());
+    ppo.optimizer = optimizer;
+    ppo.learning_rate = loaded.info.learning_rate;
+    ppo
 }

@@ -234,7 +234,7 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     assert!(err.to_string().contains("exists") && err.to_string().contains("bad.safetensors"), "{err}");
     assert_eq!(std::fs::read(&bad_file).unwrap(), bytes);
     // Exported from a checkpoint: the same networks, as a policy (no optimizer, no random state).
-    let from = flapper_ppo::runner::latest_checkpoint(&dir).expect("the run saved checkpoints");
+    let from = flapper_ppo::run_folder::latest_checkpoint(&dir).expect("the run saved checkpoints");
     let exported = renoised.join("exported.safetensors");
     let info = checkpoint::export_policy(&from, &exported).unwrap();
     let (saved, loaded) = (checkpoint::load(&from).unwrap(), checkpoint::load(&exported).unwrap());
