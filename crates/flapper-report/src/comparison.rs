@@ -99,22 +99,38 @@ fn described<S: serde::Serializer>(sources: &[Source], serializer: S) -> Result<
     serializer.collect_str(&sources.iter().map(Source::describe).collect::<Vec<_>>().join(" "))
 }
 
-/// What the paper says, and the files of a report run.
-pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
-    let mut rows = Vec::new();
-    let read = |s: &Source| s.read(out);
-    // A row whose sources are all there; otherwise "not measured".
-    let mut row = |claim: &str, paper: &str, sources: Vec<Source>, text: &dyn Fn(&[String]) -> (String, String)| {
-        let values: Option<Vec<String>> = sources.iter().map(read).collect();
+/// The table being built from the files of the report folder `out`.
+struct Table<'a> {
+    out: &'a Path,
+    rows: Vec<Row>,
+}
+
+impl Table<'_> {
+    /// Adds a row whose text `text` makes from its sources' values when every source is there;
+    /// otherwise the row says "not measured".
+    fn row(&mut self, claim: &str, paper: &str, sources: Vec<Source>, text: &dyn Fn(&[String]) -> (String, String)) {
+        let values: Option<Vec<String>> = sources.iter().map(|s| s.read(self.out)).collect();
         let (flapper, verdict) = match values {
             Some(v) => text(&v),
             None => ("not measured".into(), "-".into()),
         };
-        rows.push(Row { claim: claim.into(), paper: paper.into(), flapper, verdict, sources });
-    };
+        self.rows.push(Row { claim: claim.into(), paper: paper.into(), flapper, verdict, sources });
+    }
+}
 
+/// What the paper says, and the files of a report run.
+pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
+    let mut table = Table { out, rows: Vec::new() };
+    for add in [gait, identification, manoeuvres, training_cost, robustness, phase_portraits] {
+        add(&mut table);
+    }
+    Ok(table.rows)
+}
+
+/// The learned gait: flapping frequency and the energy in its fundamental.
+fn gait(table: &mut Table) {
     let cruise = "tracking/cruise/summary.json";
-    row(
+    table.row(
         "learned flapping frequency (cruise at 3.8 m/s)",
         "5.3 Hz",
         (0..3).map(|k| Source::new(cruise, &format!("/summary/frequency_hz/{k}"), 1.0, Format::Fixed(2))).collect(),
@@ -131,7 +147,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         },
     );
-    row(
+    table.row(
         "energy in the fundamental frequency",
         "36.8-38.7% (flap, wing pitch, tail)",
         (0..3)
@@ -145,8 +161,12 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         },
     );
+}
+
+/// The identified closed loop: its error, poles and zeros.
+fn identification(table: &mut Table) {
     let sysid = "sysid/sysid.json";
-    row(
+    table.row(
         "identification MSE of the closed loop",
         "5.6e-5 m^2",
         ["x", "y", "z"]
@@ -169,7 +189,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         ("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable"),
         ("zeros in the left half plane (minimum phase)", "minimum_phase"),
     ] {
-        row(
+        table.row(
             claim,
             "yes, every axis",
             ["x", "y", "z"].iter().map(|a| Source::new(sysid, &format!("/{a}/{key}"), 1.0, Format::YesNo)).collect(),
@@ -181,6 +201,10 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             },
         );
     }
+}
+
+/// The manoeuvres of Figs. 10-11, flown.
+fn manoeuvres(table: &mut Table) {
     for (name, claim) in [
         ("sharp-turn", "180 deg turn in 1.2 s"),
         ("loop", "loop in 3 s"),
@@ -198,7 +222,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         } else {
             sources.push(Source::new(&file, "/summary/mean_rms_error_m", 1.0, Format::Fixed(2)));
         }
-        row(claim, "flown, tracking the reference", sources, &|v| {
+        table.row(claim, "flown, tracking the reference", sources, &|v| {
             let (done, of): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(1.0));
             let detail = if manoeuvre {
                 format!("largest error in it {} m (mean)", v[2])
@@ -211,8 +235,12 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         });
     }
+}
+
+/// What training cost.
+fn training_cost(table: &mut Table) {
     let training = "training/training.json";
-    row(
+    table.row(
         "training cost",
         "30 M steps in about 5 h on 8 cores",
         vec![
@@ -228,9 +256,13 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         },
     );
+}
+
+/// Robustness to the fluid coefficients and to Table III at once.
+fn robustness(table: &mut Table) {
     let robustness = |r: &str| format!("robustness/{r}/robustness.json");
     let widest_all = |r: &str| -> Option<String> {
-        let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join(robustness(r))).ok()?).ok()?;
+        let json: Value = serde_json::from_str(&std::fs::read_to_string(table.out.join(robustness(r))).ok()?).ok()?;
         let fluid = json.get("fluid")?.as_array()?;
         let (k, _) = fluid
             .iter()
@@ -243,7 +275,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
         .iter()
         .filter_map(|r| widest_all(r).map(|p| Source::new(&robustness(r), &p, 100.0, Format::Fixed(0))))
         .collect();
-    row(
+    table.row(
         "success with all five fluid coefficients randomized x[0.5, 1.5]",
         "relatively successful (Fig. 9)",
         pointers,
@@ -258,7 +290,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             (text, if ok { "agrees (>= 80%)".into() } else { "partly: below 80% somewhere".into() })
         },
     );
-    row(
+    table.row(
         "most sensitive fluid coefficient",
         "Kutta lift C_K",
         ["longitudinal", "lateral"]
@@ -278,7 +310,7 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         },
     );
-    row(
+    table.row(
         "everything in Table III randomized at once",
         "tracks (Fig. 8)",
         ["longitudinal", "lateral"]
@@ -293,16 +325,19 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             )
         },
     );
-    // The phase portraits' claims, one row each, as `flapper phase` checks them.
-    let claims = std::fs::read_to_string(out.join("phase/phase.json"))
+}
+
+/// The phase portraits' claims, one row each, as `flapper phase` checks them.
+fn phase_portraits(table: &mut Table) {
+    let claims = std::fs::read_to_string(table.out.join("phase/phase.json"))
         .ok()
         .and_then(|t| serde_json::from_str::<Value>(&t).ok())
         .and_then(|j| j["claims"].as_array().map(|a| a.len()))
         .unwrap_or(0);
     for k in 0..claims {
         let claim = Source::new("phase/phase.json", &format!("/claims/{k}/claim"), 1.0, Format::Text);
-        let paper = claim.read(out).unwrap_or_default();
-        row(
+        let paper = claim.read(table.out).unwrap_or_default();
+        table.row(
             &format!("phase portrait (Fig. 6-7): {paper}"),
             "as stated",
             vec![
@@ -317,7 +352,6 @@ pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
             },
         );
     }
-    Ok(rows)
 }
 
 /// `paper_vs_flapper.csv`: claim, paper, flapper, verdict, sources (space-separated descriptions).
