@@ -217,53 +217,12 @@ pub fn phase_portraits(
         JointTrace::of(&climb, ActuatedJoint::FlapRight),
         JointTrace::of(&climb, ActuatedJoint::PitchRight),
     ];
-    let mut claims = vec![
-        Claim {
-            claim: "climbing flaps over a larger range of angle and velocity than cruising".into(),
-            ours: format!(
-                "flap amplitude {:.1} vs {:.1} deg, velocity amplitude {:.0} vs {:.0} deg/s (climb vs cruise)",
-                lf.amplitude_rad().to_degrees(),
-                cf.amplitude_rad().to_degrees(),
-                lf.velocity_amplitude_radps().to_degrees(),
-                cf.velocity_amplitude_radps().to_degrees()
-            ),
-            confirmed: lf.amplitude_rad() > cf.amplitude_rad()
-                && lf.velocity_amplitude_radps() > cf.velocity_amplitude_radps(),
-        },
-        Claim {
-            claim: "climbing shifts the mean wing pitch negative (leading edge up)".into(),
-            ours: format!(
-                "mean wing pitch {:.1} vs {:.1} deg (climb vs cruise)",
-                lp.mean_angle_rad().to_degrees(),
-                cp.mean_angle_rad().to_degrees()
-            ),
-            confirmed: lp.mean_angle_rad() < cp.mean_angle_rad(),
-        },
-    ];
-    let mut closure = vec![("cruise flap", &cf), ("cruise pitch", &cp), ("climb flap", &lf), ("climb pitch", &lp)];
     let turn_traces = turn_skipped_because.is_none().then(|| {
         [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::FlapRight, ActuatedJoint::PitchRight]
             .map(|j| JointTrace::of(&turn, j))
     });
+    let mut closure = vec![("cruise flap", &cf), ("cruise pitch", &cp), ("climb flap", &lf), ("climb pitch", &lp)];
     if let Some([tlf, tlp, trf, trp]) = &turn_traces {
-        claims.push(Claim {
-            claim: "turning left, the right wing's mean flap is higher than the left's".into(),
-            ours: format!(
-                "mean flap right {:.1} vs left {:.1} deg",
-                trf.mean_angle_rad().to_degrees(),
-                tlf.mean_angle_rad().to_degrees()
-            ),
-            confirmed: trf.mean_angle_rad() > tlf.mean_angle_rad(),
-        });
-        claims.push(Claim {
-            claim: "turning left, the right wing pitches up (more negative mean pitch) than the left".into(),
-            ours: format!(
-                "mean pitch right {:.1} vs left {:.1} deg",
-                trp.mean_angle_rad().to_degrees(),
-                tlp.mean_angle_rad().to_degrees()
-            ),
-            confirmed: trp.mean_angle_rad() < tlp.mean_angle_rad(),
-        });
         closure.extend([
             ("turn left flap", tlf),
             ("turn left pitch", tlp),
@@ -271,16 +230,11 @@ pub fn phase_portraits(
             ("turn right pitch", trp),
         ]);
     }
-    let spreads: Vec<String> =
-        closure.iter().map(|(name, t)| format!("{name} {:.1}%", t.orbit_spread_percent())).collect();
-    claims.insert(
-        0,
-        Claim {
-            claim: format!("flap and wing pitch follow closed, consistent periodic orbits (cycle-to-cycle spread below {CLOSED_ORBIT_SPREAD_PERCENT}% of the orbit's size)"),
-            ours: spreads.join(", "),
-            confirmed: closure.iter().all(|(_, t)| t.orbit_spread_percent() < CLOSED_ORBIT_SPREAD_PERCENT),
-        },
-    );
+    let mut claims = vec![closed_orbits_claim(&closure)];
+    claims.extend(climb_claims([&cf, &cp, &lf, &lp]));
+    if let Some(traces) = &turn_traces {
+        claims.extend(turn_claims(traces));
+    }
     let report = PhaseReport {
         forward_speed_mps,
         climb_rate_mps: CLIMB_RATE_MPS,
@@ -304,6 +258,84 @@ pub fn phase_portraits(
         serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes(),
     )
     .map_err(|e| fail(&json, &e))?;
+    let mut written = vec![json];
+    written.extend(draw_portraits(dir, forward_speed_mps, [&cf, &cp, &lf, &lp], turn_traces.as_ref())?);
+    Ok((report, written))
+}
+
+/// Claim 1: every orbit closes: its cycle-to-cycle spread is below [`CLOSED_ORBIT_SPREAD_PERCENT`].
+fn closed_orbits_claim(orbits: &[(&str, &JointTrace)]) -> Claim {
+    let spreads: Vec<String> =
+        orbits.iter().map(|(name, t)| format!("{name} {:.1}%", t.orbit_spread_percent())).collect();
+    Claim {
+        claim: format!(
+            "flap and wing pitch follow closed, consistent periodic orbits (cycle-to-cycle spread below {CLOSED_ORBIT_SPREAD_PERCENT}% of the orbit's size)"
+        ),
+        ours: spreads.join(", "),
+        confirmed: orbits.iter().all(|(_, t)| t.orbit_spread_percent() < CLOSED_ORBIT_SPREAD_PERCENT),
+    }
+}
+
+/// Claims 2-3 (Fig. 6), from the right wing's flap and pitch in cruise and in the climb.
+fn climb_claims([cf, cp, lf, lp]: [&JointTrace; 4]) -> [Claim; 2] {
+    [
+        Claim {
+            claim: "climbing flaps over a larger range of angle and velocity than cruising".into(),
+            ours: format!(
+                "flap amplitude {:.1} vs {:.1} deg, velocity amplitude {:.0} vs {:.0} deg/s (climb vs cruise)",
+                lf.amplitude_rad().to_degrees(),
+                cf.amplitude_rad().to_degrees(),
+                lf.velocity_amplitude_radps().to_degrees(),
+                cf.velocity_amplitude_radps().to_degrees()
+            ),
+            confirmed: lf.amplitude_rad() > cf.amplitude_rad()
+                && lf.velocity_amplitude_radps() > cf.velocity_amplitude_radps(),
+        },
+        Claim {
+            claim: "climbing shifts the mean wing pitch negative (leading edge up)".into(),
+            ours: format!(
+                "mean wing pitch {:.1} vs {:.1} deg (climb vs cruise)",
+                lp.mean_angle_rad().to_degrees(),
+                cp.mean_angle_rad().to_degrees()
+            ),
+            confirmed: lp.mean_angle_rad() < cp.mean_angle_rad(),
+        },
+    ]
+}
+
+/// Claims 4-5 (Fig. 7), from both wings' flap and pitch while turning left.
+fn turn_claims([tlf, tlp, trf, trp]: &[JointTrace; 4]) -> [Claim; 2] {
+    [
+        Claim {
+            claim: "turning left, the right wing's mean flap is higher than the left's".into(),
+            ours: format!(
+                "mean flap right {:.1} vs left {:.1} deg",
+                trf.mean_angle_rad().to_degrees(),
+                tlf.mean_angle_rad().to_degrees()
+            ),
+            confirmed: trf.mean_angle_rad() > tlf.mean_angle_rad(),
+        },
+        Claim {
+            claim: "turning left, the right wing pitches up (more negative mean pitch) than the left".into(),
+            ours: format!(
+                "mean pitch right {:.1} vs left {:.1} deg",
+                trp.mean_angle_rad().to_degrees(),
+                tlp.mean_angle_rad().to_degrees()
+            ),
+            confirmed: trp.mean_angle_rad() < tlp.mean_angle_rad(),
+        },
+    ]
+}
+
+/// `phase_climb.svg` (Fig. 6) and, when the turn was flown, `phase_turn.svg` (Fig. 7).
+fn draw_portraits(
+    dir: &Path,
+    forward_speed_mps: f64,
+    [cf, cp, lf, lp]: [&JointTrace; 4],
+    turn_traces: Option<&[JointTrace; 4]>,
+) -> Result<Vec<PathBuf>, AnalysisError> {
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let orbit = |label: &str, t: &JointTrace, k: usize| Curve {
         label: label.to_string(),
         points: t.angle_rad.iter().zip(&t.velocity_radps).map(|(a, v)| (a.to_degrees(), v.to_degrees())).collect(),
@@ -317,18 +349,18 @@ pub fn phase_portraits(
         curves,
         equal_aspect: false,
     };
-    let mut written = vec![json];
+    let mut written = Vec::new();
     let climb_svg = dir.join("phase_climb.svg");
     let panels = [
         panel(
             format!("right wing flap, cruise vs climb at {forward_speed_mps} m/s"),
-            vec![orbit("cruise", &cf, 0), orbit("climb", &lf, 1)],
+            vec![orbit("cruise", cf, 0), orbit("climb", lf, 1)],
         ),
-        panel("right wing pitch, cruise vs climb".into(), vec![orbit("cruise", &cp, 0), orbit("climb", &lp, 1)]),
+        panel("right wing pitch, cruise vs climb".into(), vec![orbit("cruise", cp, 0), orbit("climb", lp, 1)]),
     ];
     flapper_plot::draw(&climb_svg, (1200, 520), &panels, (1, 2)).map_err(|e| fail(&climb_svg, &e))?;
     written.push(climb_svg);
-    if let Some([tlf, tlp, trf, trp]) = &turn_traces {
+    if let Some([tlf, tlp, trf, trp]) = turn_traces {
         let turn_svg = dir.join("phase_turn.svg");
         let panels = [
             panel(
@@ -343,7 +375,7 @@ pub fn phase_portraits(
         flapper_plot::draw(&turn_svg, (1200, 520), &panels, (1, 2)).map_err(|e| fail(&turn_svg, &e))?;
         written.push(turn_svg);
     }
-    Ok((report, written))
+    Ok(written)
 }
 
 #[cfg(test)]
