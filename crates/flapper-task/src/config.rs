@@ -307,7 +307,14 @@ impl TaskConfig {
     /// no buffer outgrows memory (at most 100 000 steps of 30 ms-scale work per episode, 1000 history
     /// frames or lookahead points, 100 substeps), offsets and rates within what the robot could meet.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let invalid = |key, value: String, why| Err(ConfigError::Invalid { key, value, why });
+        self.check_counts()?;
+        self.check_scalars()?;
+        self.check_reference_intervals()?;
+        self.check_randomization()
+    }
+
+    /// Counts: at least 1, at most a bound no run needs more than.
+    fn check_counts(&self) -> Result<(), ConfigError> {
         for (key, value, max) in [
             ("control.substeps", self.control.substeps, 100),
             ("observation.history_frames", self.observation.history_frames, 1000),
@@ -317,8 +324,16 @@ impl TaskConfig {
             if value > max {
                 return Err(ConfigError::TooLarge { key, value: value.to_string(), max: max.to_string() });
             }
+            if value == 0 {
+                return Err(ConfigError::Invalid { key, value: "0".into(), why: "must be at least 1" });
+            }
         }
-        let i = &self.initial_state;
+        Ok(())
+    }
+
+    /// Every single number with its closed range (NaN is refused by every range).
+    fn check_scalars(&self) -> Result<(), ConfigError> {
+        let (i, r, f, g) = (&self.initial_state, &self.reward, &self.reference, &self.randomization);
         for (key, value, low, high) in [
             ("initial_state.position_offset_m[0]", i.position_offset_m[0], 0.0, 10.0),
             ("initial_state.position_offset_m[1]", i.position_offset_m[1], 0.0, 10.0),
@@ -328,134 +343,57 @@ impl TaskConfig {
             ("initial_state.attitude_offset_deg", i.attitude_offset_deg, 0.0, 180.0),
             ("episode.attitude_limit_deg", self.episode.attitude_limit_deg, 1.0, 180.0),
             ("episode.max_position_error_m", self.episode.max_position_error_m, 0.01, 100.0),
-            ("reference.command_duration_s", self.reference.command_duration_s, 0.1, 60.0),
-            ("reference.loop_duration_s", self.reference.loop_duration_s, 1.0, 60.0),
+            ("reference.command_duration_s", f.command_duration_s, 0.1, 60.0),
+            ("reference.loop_duration_s", f.loop_duration_s, 1.0, 60.0),
+            ("reference.loop_probability", f.loop_probability, 0.0, 1.0),
+            ("reference.sharp_turn_probability", f.sharp_turn_probability, 0.0, 1.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
-            ("reward.position_scale_m", self.reward.position_scale_m, 1e-3, 1e3),
-            ("reward.body_rate_scale_radps", self.reward.body_rate_scale_radps, 1e-3, 1e3),
-            ("reward.level_scale_rad", self.reward.level_scale_rad, 1e-3, 1e3),
-            ("reward.energy_scale_w", self.reward.energy_scale_w, 1e-3, 1e5),
-            ("reward.position_weight", self.reward.position_weight, 0.0, 1e3),
-            ("reward.body_rate_weight", self.reward.body_rate_weight, 0.0, 1e3),
-            ("reward.level_weight", self.reward.level_weight, 0.0, 1e3),
-            ("reward.energy_weight", self.reward.energy_weight, 0.0, 1e3),
+            ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
+            ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
+            ("reward.body_rate_scale_radps", r.body_rate_scale_radps, 1e-3, 1e3),
+            ("reward.level_scale_rad", r.level_scale_rad, 1e-3, 1e3),
+            ("reward.energy_scale_w", r.energy_scale_w, 1e-3, 1e5),
+            ("reward.position_weight", r.position_weight, 0.0, 1e3),
+            ("reward.body_rate_weight", r.body_rate_weight, 0.0, 1e3),
+            ("reward.level_weight", r.level_weight, 0.0, 1e3),
+            ("reward.energy_weight", r.energy_weight, 0.0, 1e3),
+            ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
+            ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
+            ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
+            ("randomization.wind_mps[1]", g.wind_mps[1], 0.0, 20.0),
+            ("randomization.wind_mps[2]", g.wind_mps[2], 0.0, 20.0),
+            ("randomization.steady_wind_mps[0]", g.steady_wind_mps[0], -20.0, 20.0),
+            ("randomization.steady_wind_mps[1]", g.steady_wind_mps[1], -20.0, 20.0),
+            ("randomization.steady_wind_mps[2]", g.steady_wind_mps[2], -20.0, 20.0),
         ] {
             if !(value >= low && value <= high) {
                 return Err(ConfigError::OutOfRange { key, value: value.to_string(), low, high });
             }
         }
+        Ok(())
+    }
+
+    /// The reference generator's intervals: ordered, finite, and within their range.
+    fn check_reference_intervals(&self) -> Result<(), ConfigError> {
+        let f = &self.reference;
+        let fastest = crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS;
         for (key, interval, low, high) in [
-            ("reference.vertical_speed_mps", self.reference.vertical_speed_mps, -15.0, 15.0),
-            ("reference.yaw_rate_degps", self.reference.yaw_rate_degps, -720.0, 720.0),
+            ("reference.forward_speed_mps", f.forward_speed_mps, 0.1, fastest),
+            ("reference.vertical_speed_mps", f.vertical_speed_mps, -15.0, 15.0),
+            ("reference.yaw_rate_degps", f.yaw_rate_degps, -720.0, 720.0),
+            ("reference.sharp_turn_deg", f.sharp_turn_deg, 0.0, 360.0),
+            ("reference.sharp_turn_duration_s", f.sharp_turn_duration_s, 0.2, 60.0),
         ] {
+            check_interval(key, interval)?;
             if !(interval[0] >= low && interval[1] <= high) {
                 return Err(ConfigError::OutOfRange { key, value: format!("{interval:?}"), low, high });
             }
         }
-        for (key, interval) in [
-            ("randomization.joint_damping_scale", self.randomization.joint_damping_scale),
-            ("randomization.link_mass_scale", self.randomization.link_mass_scale),
-            ("randomization.link_inertia_scale", self.randomization.link_inertia_scale),
-            ("randomization.fluid_coefficient_scale", self.randomization.fluid_coefficient_scale),
-            ("randomization.added_mass_scale", self.randomization.added_mass_scale),
-            ("randomization.added_inertia_scale", self.randomization.added_inertia_scale),
-        ] {
-            if !(interval[1] <= 10.0) {
-                return Err(ConfigError::Invalid {
-                    key,
-                    value: format!("{interval:?}"),
-                    why: "scales must be at most 10",
-                });
-            }
-        }
-        if self.control.substeps == 0 {
-            return invalid("control.substeps", "0".into(), "must be at least 1");
-        }
-        if !(self.control.filter_cutoff_hz > 0.0 && self.control.filter_cutoff_hz.is_finite()) {
-            return invalid("control.filter_cutoff_hz", self.control.filter_cutoff_hz.to_string(), "must be positive");
-        }
-        if !(self.control.action_scale > 0.0 && self.control.action_scale <= 1.0) {
-            return invalid("control.action_scale", self.control.action_scale.to_string(), "must be in (0, 1]");
-        }
-        if self.observation.history_frames == 0 || self.observation.lookahead_steps == 0 {
-            return invalid("observation", format!("{:?}", self.observation), "history and lookahead need at least 1");
-        }
-        let r = &self.reward;
-        for (key, value) in [
-            ("reward.position_scale_m", r.position_scale_m),
-            ("reward.body_rate_scale_radps", r.body_rate_scale_radps),
-            ("reward.level_scale_rad", r.level_scale_rad),
-            ("reward.energy_scale_w", r.energy_scale_w),
-        ] {
-            if !(value > 0.0 && value.is_finite()) {
-                return invalid(key, value.to_string(), "must be positive");
-            }
-        }
-        for (key, value) in [
-            ("reward.position_weight", r.position_weight),
-            ("reward.body_rate_weight", r.body_rate_weight),
-            ("reward.level_weight", r.level_weight),
-            ("reward.energy_weight", r.energy_weight),
-        ] {
-            if !(value >= 0.0 && value.is_finite()) {
-                return invalid(key, value.to_string(), "must be finite and not negative");
-            }
-        }
-        if self.episode.max_steps == 0 {
-            return invalid("episode.max_steps", "0".into(), "must be at least 1");
-        }
-        if !(self.episode.max_position_error_m > 0.0) {
-            return invalid(
-                "episode.max_position_error_m",
-                self.episode.max_position_error_m.to_string(),
-                "must be positive",
-            );
-        }
-        let f = &self.reference;
-        if !(f.command_duration_s >= 0.1) {
-            return invalid("reference.command_duration_s", f.command_duration_s.to_string(), "must be at least 0.1 s");
-        }
-        for (key, interval) in [
-            ("reference.forward_speed_mps", f.forward_speed_mps),
-            ("reference.vertical_speed_mps", f.vertical_speed_mps),
-            ("reference.yaw_rate_degps", f.yaw_rate_degps),
-        ] {
-            check_interval(key, interval)?;
-        }
-        if !(f.forward_speed_mps[0] > 0.0
-            && f.forward_speed_mps[1] <= crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS)
-        {
-            return invalid(
-                "reference.forward_speed_mps",
-                format!("{:?}", f.forward_speed_mps),
-                "must lie in (0, 15] m/s",
-            );
-        }
-        if !(0.0..=1.0).contains(&f.loop_probability) {
-            return invalid("reference.loop_probability", f.loop_probability.to_string(), "must be in [0, 1]");
-        }
-        if !(f.loop_duration_s >= 1.0) {
-            return invalid("reference.loop_duration_s", f.loop_duration_s.to_string(), "must be at least 1 s");
-        }
-        if !(0.0..=1.0).contains(&f.sharp_turn_probability) {
-            return invalid(
-                "reference.sharp_turn_probability",
-                f.sharp_turn_probability.to_string(),
-                "must be in [0, 1]",
-            );
-        }
-        check_interval("reference.sharp_turn_deg", f.sharp_turn_deg)?;
-        if !(f.sharp_turn_deg[0] >= 0.0 && f.sharp_turn_deg[1] <= 360.0) {
-            return invalid("reference.sharp_turn_deg", format!("{:?}", f.sharp_turn_deg), "must lie in [0, 360] deg");
-        }
-        check_interval("reference.sharp_turn_duration_s", f.sharp_turn_duration_s)?;
-        if !(f.sharp_turn_duration_s[0] >= 0.2 && f.sharp_turn_duration_s[1] <= 60.0) {
-            return invalid(
-                "reference.sharp_turn_duration_s",
-                format!("{:?}", f.sharp_turn_duration_s),
-                "must lie in [0.2, 60] s",
-            );
-        }
+        Ok(())
+    }
+
+    /// The randomization's scale intervals: ordered, positive, at most 10.
+    fn check_randomization(&self) -> Result<(), ConfigError> {
         let g = &self.randomization;
         for (key, interval) in [
             ("randomization.joint_damping_scale", g.joint_damping_scale),
@@ -466,29 +404,13 @@ impl TaskConfig {
             ("randomization.added_inertia_scale", g.added_inertia_scale),
         ] {
             check_interval(key, interval)?;
-            if interval[0] <= 0.0 {
-                return invalid(key, format!("{interval:?}"), "scales must be positive");
+            if !(interval[0] > 0.0 && interval[1] <= 10.0) {
+                return Err(ConfigError::Invalid {
+                    key,
+                    value: format!("{interval:?}"),
+                    why: "scales must lie in (0, 10]",
+                });
             }
-        }
-        if !(g.episode_fraction >= 0.0 && g.episode_fraction <= 1.0) {
-            return invalid("randomization.episode_fraction", g.episode_fraction.to_string(), "must be in [0, 1]");
-        }
-        if !(g.link_com_offset_m >= 0.0 && g.link_com_offset_m <= 0.1) {
-            return invalid(
-                "randomization.link_com_offset_m",
-                g.link_com_offset_m.to_string(),
-                "must be in [0, 0.1] m",
-            );
-        }
-        if !g.wind_mps.iter().all(|w| (0.0..=20.0).contains(w)) {
-            return invalid("randomization.wind_mps", format!("{:?}", g.wind_mps), "each must be in [0, 20] m/s");
-        }
-        if !g.steady_wind_mps.iter().all(|w| (-20.0..=20.0).contains(w)) {
-            return invalid(
-                "randomization.steady_wind_mps",
-                format!("{:?}", g.steady_wind_mps),
-                "each must be in [-20, 20] m/s",
-            );
         }
         Ok(())
     }
