@@ -111,72 +111,47 @@ impl Default for RunnerConfig {
 }
 
 impl PpoConfig {
+    /// Every setting against its range, one table for the counts and one for the real numbers (NaN
+    /// and infinity fail every range).
     pub fn validate(&self) -> Result<(), InvalidSetting> {
-        let invalid = |key, value: String, why| Err(InvalidSetting { key, value, why });
-        for (key, value) in [
-            ("ppo.steps_per_env", self.steps_per_env),
-            ("ppo.epochs", self.epochs),
-            ("ppo.minibatches", self.minibatches),
+        for (key, value, max, why) in [
+            ("ppo.steps_per_env", self.steps_per_env, 10_000, "must be 1 to 10000"),
+            ("ppo.epochs", self.epochs, 1000, "must be 1 to 1000"),
+            ("ppo.minibatches", self.minibatches, 100_000, "must be 1 to 100000"),
         ] {
-            if value == 0 {
-                return invalid(key, "0".into(), "must be at least 1");
+            if value == 0 || value > max {
+                return Err(InvalidSetting { key, value: value.to_string(), why });
             }
         }
-        let positive = [
-            ("ppo.clip", self.clip),
-            ("ppo.max_grad_norm", self.max_grad_norm),
-            ("ppo.learning_rate", self.learning_rate),
-            ("ppo.desired_kl", self.desired_kl),
-            ("ppo.init_noise_std", self.init_noise_std),
-        ];
-        for (key, value) in positive {
-            if !(value > 0.0 && value.is_finite()) {
-                return invalid(key, value.to_string(), "must be positive");
-            }
-        }
-        for (key, value) in [("ppo.value_loss_coef", self.value_loss_coef), ("ppo.entropy_coef", self.entropy_coef)] {
-            if !(value >= 0.0 && value.is_finite()) {
-                return invalid(key, value.to_string(), "must be finite and not negative");
-            }
-        }
-        for (key, value) in [("ppo.gamma", self.gamma), ("ppo.lambda", self.lambda)] {
-            if !(0.0..=1.0).contains(&value) {
-                return invalid(key, value.to_string(), "must be in [0, 1]");
-            }
-        }
-        for (key, value, max) in [
-            ("ppo.steps_per_env", self.steps_per_env, 10_000),
-            ("ppo.epochs", self.epochs, 1000),
-            ("ppo.minibatches", self.minibatches, 100_000),
+        let positive = |value: f32, max: f32| value > 0.0 && value <= max;
+        let not_negative = |value: f32, max: f32| value >= 0.0 && value <= max;
+        for (key, value, fits, why) in [
+            ("ppo.clip", self.clip, positive(self.clip, 10.0), "must be in (0, 10]"),
+            ("ppo.max_grad_norm", self.max_grad_norm, positive(self.max_grad_norm, 1e6), "must be in (0, 1e6]"),
+            ("ppo.learning_rate", self.learning_rate, positive(self.learning_rate, 1.0), "must be in (0, 1]"),
+            ("ppo.desired_kl", self.desired_kl, positive(self.desired_kl, 10.0), "must be in (0, 10]"),
+            ("ppo.init_noise_std", self.init_noise_std, positive(self.init_noise_std, 100.0), "must be in (0, 100]"),
+            (
+                "ppo.value_loss_coef",
+                self.value_loss_coef,
+                not_negative(self.value_loss_coef, 1e3),
+                "must be in [0, 1000]",
+            ),
+            ("ppo.entropy_coef", self.entropy_coef, not_negative(self.entropy_coef, 1e3), "must be in [0, 1000]"),
+            ("ppo.gamma", self.gamma, not_negative(self.gamma, 1.0), "must be in [0, 1]"),
+            ("ppo.lambda", self.lambda, not_negative(self.lambda, 1.0), "must be in [0, 1]"),
         ] {
-            if value > max {
-                return invalid(
-                    key,
-                    value.to_string(),
-                    "too large (steps_per_env <= 10000, epochs <= 1000, minibatches <= 100000)",
-                );
-            }
-        }
-        for (key, value, max) in [
-            ("ppo.clip", self.clip, 10.0),
-            ("ppo.max_grad_norm", self.max_grad_norm, 1e6),
-            ("ppo.learning_rate", self.learning_rate, 1.0),
-            ("ppo.desired_kl", self.desired_kl, 10.0),
-            ("ppo.init_noise_std", self.init_noise_std, 100.0),
-            ("ppo.value_loss_coef", self.value_loss_coef, 1e3),
-            ("ppo.entropy_coef", self.entropy_coef, 1e3),
-        ] {
-            if value > max {
-                return invalid(
-                    key,
-                    value.to_string(),
-                    "too large (clip <= 10, max_grad_norm <= 1e6, learning_rate <= 1, desired_kl <= 10, init_noise_std <= 100, coefficients <= 1000)",
-                );
+            if !fits {
+                return Err(InvalidSetting { key, value: value.to_string(), why });
             }
         }
         for (key, sizes) in [("ppo.actor_hidden", &self.actor_hidden), ("ppo.critic_hidden", &self.critic_hidden)] {
             if sizes.is_empty() || sizes.iter().any(|&s| s == 0 || s > 4096) {
-                return invalid(key, format!("{sizes:?}"), "needs at least one hidden layer, each of 1 to 4096 units");
+                return Err(InvalidSetting {
+                    key,
+                    value: format!("{sizes:?}"),
+                    why: "needs at least one hidden layer, each of 1 to 4096 units",
+                });
             }
         }
         Ok(())
