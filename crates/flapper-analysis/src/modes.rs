@@ -1,13 +1,14 @@
 //! Flight modes along the paper's longitudinal reference (cruise, climb +0.8 m/s, glide -0.83 m/s,
 //! dive -1.5 m/s, 6 s each at 3.8 m/s): per segment the flap amplitude, its fundamental frequency and
-//! energy fraction, and the mechanical power, to answer whether the policy glides ("gliding instead of
+//! energy fraction, the mechanical power, the energy per metre flown and the share of the time spent
+//! gliding (wings held, no flapping cycle), to answer whether the policy glides ("gliding instead of
 //! flapping when possible") or flaps throughout. Flown from an exact start.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flapper_eval::spectrum::fundamental;
-use flapper_eval::tracking::{Pilot, evaluate_tracking};
+use flapper_eval::tracking::{Pilot, TrackingStep, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
@@ -21,8 +22,15 @@ use crate::AnalysisError;
 /// The longitudinal reference's segments: name, start and end (s).
 pub const SEGMENTS: [(&str, f64, f64); 4] =
     [("cruise", 0.0, 6.0), ("climb", 6.0, 12.0), ("glide", 12.0, 18.0), ("dive", 18.0, 24.0)];
-/// A segment counts as gliding when its flap amplitude is below this fraction of the cruise's.
-pub const GLIDE_AMPLITUDE_FRACTION: f64 = 0.25;
+/// A moment counts as gliding when the flap angle moves less than this, peak to peak, over the
+/// [`GLIDE_WINDOW_S`] centred on it: the wings are held, no flapping cycle runs. (The cruise gait
+/// flaps about 100 deg peak to peak.)
+pub const GLIDE_MAX_FLAP_RANGE_DEG: f64 = 10.0;
+/// Two cycles of the cruise gait's 5 Hz flapping: long enough that a flapping wing always moves
+/// through its range within it.
+pub const GLIDE_WINDOW_S: f64 = 0.4;
+/// A segment glides when at least this share of its time is spent gliding.
+pub const GLIDING_SEGMENT_FRACTION: f64 = 0.5;
 /// The launch transient left out of the first segment (s).
 const SETTLE_S: f64 = 2.0;
 
@@ -37,7 +45,11 @@ pub struct SegmentFigures {
     pub flap_energy_fraction: f64,
     pub mean_power_w: f64,
     pub mean_absolute_power_w: f64,
-    /// Flap amplitude below `GLIDE_AMPLITUDE_FRACTION` of the cruise segment's.
+    /// Absolute mechanical energy over the distance flown in the segment (J/m).
+    pub energy_per_metre_j: f64,
+    /// Share of the segment's time spent gliding ([`held_wings`]).
+    pub glide_fraction: f64,
+    /// `glide_fraction` at least [`GLIDING_SEGMENT_FRACTION`].
     pub glides: bool,
 }
 
@@ -73,41 +85,19 @@ pub fn flight_modes(
         });
     }
     let flap = ActuatedJoint::FlapLeft.index();
-    let mut segments: Vec<SegmentFigures> = SEGMENTS
+    let flap_angles: Vec<f64> = flight.steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
+    let held = held_wings(&flap_angles, dt_s);
+    let segments: Vec<SegmentFigures> = SEGMENTS
         .iter()
-        .map(|&(segment, start_s, end_s)| {
-            let inside: Vec<_> =
-                flight.steps.iter().filter(|s| s.time_s >= start_s.max(SETTLE_S) && s.time_s < end_s).collect();
-            let angles: Vec<f64> = inside.iter().map(|s| s.joint_positions_rad[flap]).collect();
-            let (lo, hi) =
-                angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
-            let found = fundamental(&angles, 50.0);
-            let n = inside.len().max(1) as f64;
-            SegmentFigures {
-                segment,
-                start_s,
-                end_s,
-                flap_amplitude_deg: (0.5 * (hi - lo)).to_degrees(),
-                flap_fundamental_hz: found.map_or(f64::NAN, |f| f.frequency_hz),
-                flap_energy_fraction: found.map_or(f64::NAN, |f| f.energy_fraction),
-                mean_power_w: inside.iter().map(|s| s.mechanical_power_w).sum::<f64>() / n,
-                mean_absolute_power_w: inside.iter().map(|s| s.absolute_power_w).sum::<f64>() / n,
-                glides: false,
-            }
-        })
+        .map(|&(segment, start_s, end_s)| segment_figures(&flight.steps, &held, dt_s, segment, start_s, end_s))
         .collect();
-    let cruise_amplitude = segments[0].flap_amplitude_deg;
-    for s in &mut segments {
-        s.glides = s.flap_amplitude_deg < GLIDE_AMPLITUDE_FRACTION * cruise_amplitude;
-    }
     let gliding: Vec<&str> = segments.iter().filter(|s| s.glides).map(|s| s.segment).collect();
     let verdict = if gliding.is_empty() {
         format!(
-            "no: the policy flaps in every segment (glide {:.0} deg, dive {:.0} deg against {:.0} deg in cruise; gliding would be below {:.0}%)",
-            segments[2].flap_amplitude_deg,
-            segments[3].flap_amplitude_deg,
-            cruise_amplitude,
-            100.0 * GLIDE_AMPLITUDE_FRACTION
+            "no: the wings are held {:.0}% of the glide segment and {:.0}% of the dive (a segment glides from {:.0}%)",
+            100.0 * segments[2].glide_fraction,
+            100.0 * segments[3].glide_fraction,
+            100.0 * GLIDING_SEGMENT_FRACTION
         )
     } else {
         format!("yes, in: {}", gliding.join(", "))
@@ -145,6 +135,30 @@ pub fn flight_modes(
         dashed: false,
     }];
     power_curves.extend(boundaries(0.0, max_power));
+    let held_points: Vec<(f64, f64)> =
+        flight.steps.iter().zip(&held).map(|(s, &h)| (s.time_s, if h { 1.0 } else { 0.0 })).collect();
+    let per_segment = |value: &dyn Fn(&SegmentFigures) -> f64| -> Vec<(f64, f64)> {
+        report.segments.iter().flat_map(|s| [(s.start_s, value(s)), (s.end_s, value(s))]).collect()
+    };
+    let mut glide_curves = vec![
+        Curve { label: "wings held (1) or flapping (0)".into(), points: held_points, color: COLORS[2], dashed: false },
+        Curve {
+            label: "glide fraction of the segment".into(),
+            points: per_segment(&|s| s.glide_fraction),
+            color: COLORS[3],
+            dashed: false,
+        },
+    ];
+    glide_curves.extend(boundaries(0.0, 1.0));
+    let energy = per_segment(&|s| s.energy_per_metre_j);
+    let max_energy = energy.iter().map(|p| p.1).filter(|e| e.is_finite()).fold(0.0, f64::max);
+    let mut energy_curves = vec![Curve {
+        label: "energy per metre of the segment".into(),
+        points: energy,
+        color: COLORS[1],
+        dashed: false,
+    }];
+    energy_curves.extend(boundaries(0.0, max_energy));
     let panels = [
         Panel {
             title: "longitudinal reference: flap angle (cruise | climb | glide | dive)".into(),
@@ -160,7 +174,110 @@ pub fn flight_modes(
             curves: power_curves,
             equal_aspect: false,
         },
+        Panel {
+            title: format!(
+                "gliding: flap range below {GLIDE_MAX_FLAP_RANGE_DEG} deg over the {GLIDE_WINDOW_S} s around each moment"
+            ),
+            x_label: "time (s)",
+            y_label: "share",
+            curves: glide_curves,
+            equal_aspect: false,
+        },
+        Panel {
+            title: "absolute mechanical energy per metre flown, per segment".into(),
+            x_label: "time (s)",
+            y_label: "J/m",
+            curves: energy_curves,
+            equal_aspect: false,
+        },
     ];
-    flapper_plot::draw(&svg, (1200, 800), &panels, (2, 1)).map_err(|e| fail(&svg, &e))?;
+    flapper_plot::draw(&svg, (1200, 1400), &panels, (4, 1)).map_err(|e| fail(&svg, &e))?;
     Ok((report, vec![json, svg]))
+}
+
+/// One segment's figures from the steps inside it (after the launch transient).
+fn segment_figures(
+    steps: &[TrackingStep],
+    held: &[bool],
+    dt_s: f64,
+    segment: &'static str,
+    start_s: f64,
+    end_s: f64,
+) -> SegmentFigures {
+    let inside: Vec<usize> =
+        (0..steps.len()).filter(|&k| steps[k].time_s >= start_s.max(SETTLE_S) && steps[k].time_s < end_s).collect();
+    let flap = ActuatedJoint::FlapLeft.index();
+    let angles: Vec<f64> = inside.iter().map(|&k| steps[k].joint_positions_rad[flap]).collect();
+    let (lo, hi) = angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+    let found = fundamental(&angles, 1.0 / dt_s);
+    let n = inside.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&TrackingStep) -> f64| inside.iter().map(|&k| f(&steps[k])).sum::<f64>() / n;
+    let energy_j: f64 = inside.iter().map(|&k| steps[k].absolute_power_w * dt_s).sum();
+    let distance_m: f64 = inside.windows(2).map(|w| (steps[w[1]].position_m - steps[w[0]].position_m).length()).sum();
+    let glide_fraction = inside.iter().filter(|&&k| held[k]).count() as f64 / n;
+    SegmentFigures {
+        segment,
+        start_s,
+        end_s,
+        flap_amplitude_deg: (0.5 * (hi - lo)).to_degrees(),
+        flap_fundamental_hz: found.map_or(f64::NAN, |f| f.frequency_hz),
+        flap_energy_fraction: found.map_or(f64::NAN, |f| f.energy_fraction),
+        mean_power_w: mean(&|s| s.mechanical_power_w),
+        mean_absolute_power_w: mean(&|s| s.absolute_power_w),
+        energy_per_metre_j: energy_j / distance_m.max(1e-9),
+        glide_fraction,
+        glides: glide_fraction >= GLIDING_SEGMENT_FRACTION,
+    }
+}
+
+/// Per sample of a flap angle sampled every `dt_s`: whether the wing is held (gliding), that is
+/// whether the angle's peak-to-peak range over the [`GLIDE_WINDOW_S`] centred on the sample (cut at
+/// the ends of the flight) is below [`GLIDE_MAX_FLAP_RANGE_DEG`].
+pub fn held_wings(flap_rad: &[f64], dt_s: f64) -> Vec<bool> {
+    let half = ((0.5 * GLIDE_WINDOW_S / dt_s).round() as usize).max(1);
+    let limit = GLIDE_MAX_FLAP_RANGE_DEG.to_radians();
+    (0..flap_rad.len())
+        .map(|k| {
+            let window = &flap_rad[k.saturating_sub(half)..(k + half + 1).min(flap_rad.len())];
+            let (lo, hi) =
+                window.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+            hi - lo < limit
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_held_wing_glides_and_a_flapping_one_does_not() {
+        let dt = 0.02;
+        // 4 s flapping 50 deg at 5 Hz, then 4 s held at -3 deg with a 2 deg wobble.
+        let flap: Vec<f64> = (0..400)
+            .map(|k| {
+                let t = k as f64 * dt;
+                if t < 4.0 {
+                    50f64.to_radians() * (std::f64::consts::TAU * 5.0 * t).sin()
+                } else {
+                    (-3.0 + 2.0 * (std::f64::consts::TAU * 5.0 * t).sin()).to_radians()
+                }
+            })
+            .collect();
+        let held = held_wings(&flap, dt);
+        assert!(held[..190].iter().all(|h| !h), "flapping counted as gliding");
+        assert!(held[210..].iter().all(|&h| h), "a held wing counted as flapping");
+        let share = held.iter().filter(|&&h| h).count() as f64 / held.len() as f64;
+        // The window's half (0.2 s) after the wings stop still sees the last flap.
+        assert!((share - (4.0 - 0.2) / 8.0).abs() < 0.005, "{share}");
+    }
+
+    #[test]
+    fn slow_flapping_within_the_window_is_still_flapping() {
+        // 2.5 Hz, the slowest a bird-like gait would flap: one cycle per window.
+        let dt = 0.02;
+        let flap: Vec<f64> =
+            (0..200).map(|k| 20f64.to_radians() * (std::f64::consts::TAU * 2.5 * k as f64 * dt).sin()).collect();
+        assert!(held_wings(&flap, dt).iter().all(|h| !h));
+    }
 }
