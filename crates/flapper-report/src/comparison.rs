@@ -121,7 +121,7 @@ impl Table<'_> {
 /// What the paper says, and the files of a report run.
 pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
     let mut table = Table { out, rows: Vec::new() };
-    for add in [gait, identification, manoeuvres, training_cost, robustness, phase_portraits] {
+    for add in [gait, flight_modes, identification, manoeuvres, training_cost, robustness, phase_portraits] {
         add(&mut table);
     }
     Ok(table.rows)
@@ -158,6 +158,49 @@ fn gait(table: &mut Table) {
             (
                 format!("{}% / {}% / {}%", v[0], v[1], v[2]),
                 if within { "agrees (30-45%)".into() } else { "differs".into() },
+            )
+        },
+    );
+}
+
+/// Flight modes: gliding where the path allows it, and level flight at the speed of the paper's phase
+/// portraits.
+fn flight_modes(table: &mut Table) {
+    let modes = "modes/modes.json";
+    table.row(
+        "switches between flight modes: glides when possible (glide segment of longitudinal)",
+        "glides instead of flapping when possible",
+        vec![
+            Source::new(modes, "/segments/2/glide_fraction", 1.0, Format::Fixed(2)),
+            Source::new(modes, "/segments/3/glide_fraction", 1.0, Format::Fixed(2)),
+            Source::new(modes, "/segments/2/flap_amplitude_deg", 1.0, Format::Fixed(0)),
+            Source::new(modes, "/segments/0/flap_amplitude_deg", 1.0, Format::Fixed(0)),
+        ],
+        &|v| {
+            let glides = v[0].parse::<f64>().is_ok_and(|f| f >= 0.5);
+            (
+                format!(
+                    "wings held {} of the glide segment, {} of the dive; flap amplitude {} deg gliding vs {} deg in cruise",
+                    v[0], v[1], v[2], v[3]
+                ),
+                if glides { "agrees (glide fraction >= 0.5)".into() } else { "differs: flaps through the glide".into() },
+            )
+        },
+    );
+    table.row(
+        "level flight at 3 m/s (the phase portraits' speed)",
+        "flown",
+        vec![Source::new(
+            "robustness/longitudinal/robustness.json",
+            "/envelope/slowest_sustained_mps",
+            1.0,
+            Format::Fixed(1),
+        )],
+        &|v| {
+            let slow_enough = v[0].parse::<f64>().is_ok_and(|s| s <= 3.0);
+            (
+                format!("slowest level flight completed in >= 90% of episodes: {} m/s", v[0]),
+                if slow_enough { "agrees".into() } else { format!("differs: not below {} m/s", v[0]) },
             )
         },
     );

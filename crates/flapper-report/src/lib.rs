@@ -129,7 +129,7 @@ pub fn generate(
     }
     experiments::sysid(robot, policy.clone(), &task, &out.join("sysid"))?;
     progress("system identification");
-    experiments::phase(robot, policy.clone(), &task, &out.join("phase"))?;
+    notes.extend(experiments::phase(robot, policy.clone(), &task, &out.join("phase"))?);
     progress("phase portraits");
     experiments::modes(robot, policy.clone(), &task, &out.join("modes"))?;
     progress("flight modes");

@@ -175,8 +175,9 @@ fn fig5_sysid(out: &Path) -> Section {
 
 /// Figs. 6-7: phase portraits.
 fn fig6_7_phase(out: &Path) -> Section {
+    let speed = json(out, "phase/phase.json")["forward_speed_mps"].as_f64().map_or("-".into(), |v| format!("{v}"));
     let mut phase = vec![figure(
-        "Right wing, cruise vs climb at 3.8 m/s (the paper's Fig. 6 flies 3 m/s).",
+        &format!("Right wing, cruise vs climb at {speed} m/s (the paper's Fig. 6 flies 3 m/s)."),
         "phase/phase_climb.svg",
     )];
     if out.join("phase/phase_turn.svg").exists() {
