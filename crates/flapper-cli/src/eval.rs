@@ -47,6 +47,9 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     // Every pilot's task steps at the same rate: the control substeps are the paper's for both.
     let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
+    if let Some(warning) = flapper_eval::tracking::speed_warning(&reference) {
+        eprintln!("warning: {warning}");
+    }
     crate::output_dir::prepare_output_dir(out)?;
     println!(
         "{}: {:.1} s, {} episodes from randomized starts (seed {seed})",

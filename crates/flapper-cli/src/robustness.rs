@@ -62,6 +62,9 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result
         task.control_period_s(robot.timestep_s()),
         task.observation.lookahead_steps,
     )?);
+    if let Some(warning) = flapper_eval::tracking::speed_warning(&reference) {
+        eprintln!("warning: {warning}");
+    }
     crate::output_dir::prepare_output_dir(args.out)?;
     let settings = RobustnessSettings {
         sweeps,

@@ -116,6 +116,24 @@ impl EpisodeResult {
     }
 }
 
+/// The speeds along a path (m/s) the final controller is known to track: its level-flight envelope
+/// (`flapper robustness --reference longitudinal`, "envelope": completed in at least 90% of 20
+/// episodes of 15 s level flight). A path outside it may still be flown, but nothing vouches for it.
+pub const TRACKED_SPEEDS_MPS: [f64; 2] = [3.5, 8.0];
+
+/// A warning for a path that asks for speeds outside [`TRACKED_SPEEDS_MPS`], naming them.
+pub fn speed_warning(reference: &Reference) -> Option<String> {
+    let [slowest, fastest] = reference.speed_range_mps();
+    let [low, high] = TRACKED_SPEEDS_MPS;
+    // A hair of tolerance: a path sampled from a 3.5 m/s line is not "outside" by rounding.
+    (slowest < low - 0.05 || fastest > high + 0.05).then(|| {
+        format!(
+            "'{}' asks for {slowest:.1} to {fastest:.1} m/s along the path; the final controller is measured to hold {low}-{high} m/s (docs/evaluation.md), so expect failures outside it",
+            reference.name()
+        )
+    })
+}
+
 /// The task as evaluation runs it: `task` (the policy's training task) with randomization off,
 /// episodes as long as the reference, and the paper's success criterion alone: an episode fails only
 /// by falling more than `max_position_error_m` (3 m) from the target. The attitude rule of stages 1-2
@@ -276,5 +294,25 @@ fn fly_episode(
         if let Some(end) = result.end {
             return EpisodeResult { end, steps, wind_mps: env.drawn_dynamics().wind_mps };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A straight level path along x at `speed_mps`, sampled at 50 Hz for 5 s.
+    fn line(speed_mps: f64) -> Reference {
+        Reference::new("line.csv", 0.02, (0..250).map(|k| Vec3::new(speed_mps * 0.02 * k as f64, 0.0, 10.0)).collect())
+    }
+
+    #[test]
+    fn a_path_outside_the_tracked_speeds_is_warned_about_with_its_speeds() {
+        assert_eq!(line(4.0).speed_range_mps().map(|v| (v * 1e6).round() / 1e6), [4.0, 4.0]);
+        assert!(speed_warning(&line(4.0)).is_none());
+        assert!(speed_warning(&line(TRACKED_SPEEDS_MPS[0])).is_none(), "the envelope's edge is inside");
+        let slow = speed_warning(&line(2.0)).expect("2 m/s is below the envelope");
+        assert!(slow.contains("'line.csv' asks for 2.0 to 2.0 m/s"), "{slow}");
+        assert!(speed_warning(&line(9.5)).is_some());
     }
 }

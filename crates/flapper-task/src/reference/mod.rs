@@ -100,6 +100,13 @@ impl Reference {
         (b - a).length() / self.dt_s
     }
 
+    /// The slowest and the fastest speed along the path (m/s).
+    pub fn speed_range_mps(&self) -> [f64; 2] {
+        (0..self.points.len().saturating_sub(1))
+            .map(|step| self.speed(step))
+            .fold([f64::INFINITY, 0.0], |[lo, hi], v| [lo.min(v), hi.max(v)])
+    }
+
     /// Steps at which the whole lookahead window still lies on the path.
     pub fn steps_with_full_lookahead(&self, lookahead_steps: usize) -> usize {
         self.points.len().saturating_sub(lookahead_steps)
