@@ -104,11 +104,7 @@ pub fn flight_modes(
     };
     let report = ModesReport { segments, verdict };
     let json = dir.join("modes.json");
-    flapper_plot::write_atomically(
-        &json,
-        serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes(),
-    )
-    .map_err(|e| fail(&json, &e))?;
+    flapper_files::write_json(&json, &report).map_err(|e| fail(&json, &e))?;
     let svg = dir.join("modes.svg");
     let boundaries = |lo: f64, hi: f64| -> Vec<Curve> {
         SEGMENTS[1..]

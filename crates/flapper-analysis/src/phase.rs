@@ -253,11 +253,7 @@ pub fn phase_portraits(
         claims,
     };
     let json = dir.join("phase.json");
-    flapper_plot::write_atomically(
-        &json,
-        serde_json::to_string_pretty(&report).map_err(|e| fail(&json, &e))?.as_bytes(),
-    )
-    .map_err(|e| fail(&json, &e))?;
+    flapper_files::write_json(&json, &report).map_err(|e| fail(&json, &e))?;
     let mut written = vec![json];
     written.extend(draw_portraits(dir, forward_speed_mps, [&cf, &cp, &lf, &lp], turn_traces.as_ref())?);
     Ok((report, written))

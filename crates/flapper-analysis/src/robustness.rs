@@ -479,11 +479,7 @@ pub fn write_robustness(
         |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let mut written = Vec::new();
     let json = dir.join("robustness.json");
-    flapper_plot::write_atomically(
-        &json,
-        serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?.as_bytes(),
-    )
-    .map_err(|e| fail(&json, &e))?;
+    flapper_files::write_json(&json, report).map_err(|e| fail(&json, &e))?;
     written.push(json);
     if !report.fluid.is_empty() {
         let path = dir.join("robustness_fluid.csv");

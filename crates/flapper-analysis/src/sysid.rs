@@ -330,8 +330,7 @@ pub fn write_sysid_files(
     let fail =
         |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
     let json = dir.join("sysid.json");
-    let text = serde_json::to_string_pretty(report).map_err(|e| fail(&json, &e))?;
-    flapper_plot::write_atomically(&json, text.as_bytes()).map_err(|e| fail(&json, &e))?;
+    flapper_files::write_json(&json, report).map_err(|e| fail(&json, &e))?;
 
     let io = dir.join("sysid_io.csv");
     let rows = records.iter().flat_map(|r| {

@@ -282,8 +282,9 @@ fn select(
         validation_rms_m: best.score.mean_rms_m,
         checkpoint,
     };
-    let json = serde_json::to_string_pretty(&outcome).expect("the outcome serializes");
-    checkpoint::write_atomically(&here.join("selected.json"), json.as_bytes())?;
+    let selected = here.join("selected.json");
+    flapper_files::write_json(&selected, &outcome)
+        .map_err(|e| CurriculumError::File { path: selected.clone(), message: e.to_string() })?;
     Ok(outcome)
 }
 

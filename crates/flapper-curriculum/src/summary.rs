@@ -31,8 +31,7 @@ impl<'a> Summary<'a> {
     }
 
     pub fn write(&self, path: &Path) -> Result<(), CurriculumError> {
-        let json = serde_json::to_string_pretty(self).expect("the summary serializes");
-        flapper_ppo::checkpoint::write_atomically(path, json.as_bytes())?;
-        Ok(())
+        flapper_files::write_json(path, self)
+            .map_err(|e| CurriculumError::File { path: path.to_owned(), message: e.to_string() })
     }
 }

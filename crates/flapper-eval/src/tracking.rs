@@ -200,7 +200,7 @@ fn fly_episodes(
 /// as the pilot gave it (order q1..q5; the environment clips it to [-1, 1]), for checking another
 /// implementation against flapper.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct EpisodeRecord {
+pub struct EpisodeTrace {
     pub observations: Vec<Vec<f32>>,
     pub actions: Vec<Vec<f32>>,
 }
@@ -214,16 +214,16 @@ pub fn record_episode(
     reference: Arc<Reference>,
     seed: u64,
     episode: usize,
-) -> Result<(EpisodeResult, EpisodeRecord), ModelError> {
+) -> Result<(EpisodeResult, EpisodeTrace), ModelError> {
     let config = Arc::new(evaluation_task(task, &reference));
     let env = FlightEnv::new(robot, config, ReferenceSource::Fixed(reference), seed, episode)?;
-    let mut record = EpisodeRecord::default();
+    let mut record = EpisodeTrace::default();
     let result = fly_episode(env, pilot, episode, Some(&mut record));
     Ok((result, record))
 }
 
 /// A pilot's state within one episode.
-enum Flying<'a> {
+enum PilotState<'a> {
     Policy { policy: &'a ActorCritic, observation: Vec<f32>, scratch: InferenceScratch },
     Scripted { gait: ScriptedGait, action_map: ActionMap },
 }
@@ -232,15 +232,15 @@ fn fly_episode(
     mut env: FlightEnv,
     pilot: &Pilot,
     episode: usize,
-    mut record: Option<&mut EpisodeRecord>,
+    mut record: Option<&mut EpisodeTrace>,
 ) -> EpisodeResult {
     let mut flying = match pilot {
-        Pilot::Policy(policy) => Flying::Policy {
+        Pilot::Policy(policy) => PilotState::Policy {
             policy,
             observation: vec![0.0f32; env.observation_layout().size()],
             scratch: InferenceScratch::default(),
         },
-        Pilot::Scripted(config) => Flying::Scripted {
+        Pilot::Scripted(config) => PilotState::Scripted {
             gait: ScriptedGait::new(*config),
             action_map: ActionMap::new(env.control().sim(), env.config().control.action_scale),
         },
@@ -249,11 +249,11 @@ fn fly_episode(
     let mut steps = Vec::with_capacity(env.reference().len());
     loop {
         match &mut flying {
-            Flying::Policy { policy, observation, scratch } => {
+            PilotState::Policy { policy, observation, scratch } => {
                 env.observe(observation);
                 policy.act_deterministic(observation, scratch, &mut action);
             }
-            Flying::Scripted { gait, action_map } => {
+            PilotState::Scripted { gait, action_map } => {
                 gait.set_altitude_target(env.reference().target(env.step_count()).z);
                 let targets = gait.joint_targets(&FlightState::read(env.control().sim()));
                 action = action_map.to_action(&targets).to_vec();
@@ -261,8 +261,8 @@ fn fly_episode(
         }
         if let Some(record) = record.as_deref_mut() {
             let observation = match &flying {
-                Flying::Policy { observation, .. } => observation.clone(),
-                Flying::Scripted { .. } => {
+                PilotState::Policy { observation, .. } => observation.clone(),
+                PilotState::Scripted { .. } => {
                     let mut observation = vec![0.0f32; env.observation_layout().size()];
                     env.observe(&mut observation);
                     observation

@@ -12,7 +12,7 @@ use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS};
 
 use crate::OutputError;
 use crate::plots::{JointSample, write_joint_window};
-use crate::tracking::{EpisodeRecord, EpisodeResult, TrackingStep};
+use crate::tracking::{EpisodeResult, EpisodeTrace, TrackingStep};
 
 /// The joints whose flapping frequency is reported (the paper's flap, wing pitch and tail).
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] =
@@ -385,7 +385,7 @@ struct ObservationRow<'a> {
 
 /// `observations.csv`: `step`, the observation's `names`, then `action_q1`..`action_q5`, a row per
 /// control step of the recorded episode.
-pub fn write_observations_csv(record: &EpisodeRecord, names: &[String], path: &Path) -> Result<(), OutputError> {
+pub fn write_observations_csv(record: &EpisodeTrace, names: &[String], path: &Path) -> Result<(), OutputError> {
     let mut header = vec!["step".to_owned()];
     header.extend(names.iter().cloned());
     header.extend((1..=record.actions.first().map_or(N_ACTUATED_JOINTS, Vec::len)).map(|k| format!("action_q{k}")));

@@ -22,6 +22,11 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// Writes `value` to `path` as pretty-printed JSON, whole or not at all: every JSON file flapper writes.
+pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> std::io::Result<()> {
+    write_atomically(path, serde_json::to_string_pretty(value).map_err(std::io::Error::from)?.as_bytes())
+}
+
 /// A folder's lock: `dir/.lock`, held until the returned file is dropped (the OS releases it when the
 /// process ends, however it ends). `Ok(None)` when another process holds it.
 pub fn lock_folder(dir: &Path) -> std::io::Result<Option<std::fs::File>> {

@@ -14,7 +14,7 @@ use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 use flapper_task::reference::Reference;
 
-use crate::{ReportError, ReportSettings, write_file};
+use crate::{ReportError, ReportSettings, write_json};
 
 /// The named references flown for the tracking figures (Fig. 3, 8, 10, 11) and the comparison.
 pub const TRACKED_REFERENCES: [&str; 8] =
@@ -62,7 +62,7 @@ pub fn tracking(
         "policy": settings.policy.display().to_string(),
         "summary": summary,
     });
-    write_file(&dir.join("summary.json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
+    write_json(&dir.join("summary.json"), &json)?;
     write_tracking_plots(&results, &format!("policy on {name}"), dir, 3)
         .map_err(|e| ReportError::step(format!("plots of {name}"), e))?;
     Ok(Tracked { name: name.to_owned(), reference, results, period_s })
