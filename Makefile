@@ -1,5 +1,5 @@
 # The README's commands. Each fetches MuJoCo (once) and builds what it needs.
-#   make demo    fly the final controller (policies/stage4) and the scripted baseline on the paper's
+#   make demo    fly the final controller (policies/final) and the scripted baseline on the paper's
 #                aerobatic reference, 100 randomized starts; table on stdout, CSV and plots in run/demo/
 #   make test    run the whole test suite (what CI runs): formatting and lint checks, Rust tests, then the Python binding's
 #   make python  build the Python package `flapper` (crates/flapper-py) into the virtual environment
@@ -10,11 +10,11 @@
 #   make report-deps  install (Debian/Ubuntu, needs root or sudo) what rendering, video and the browser check
 #                use: Mesa's EGL software renderer, ffmpeg, chromium
 #   make report  regenerate the paper's figures and tables from the shipped policies: run/report/index.html
-#   make evaluate  fly POLICY (default: the final stage-4 policy) on every named reference, 100 randomized starts
+#   make evaluate  fly POLICY (default: the final controller, policies/final) on every named reference, 100 randomized starts
 #                each (seed 11): one table per reference on stdout, CSV and plots in run/evaluate/NAME/
 .PHONY: lint demo test train bench baseline mujoco evaluate python python-bench report report-deps
 
-POLICY ?= policies/stage4/policy.safetensors
+POLICY ?= policies/final/policy.safetensors
 REFERENCES = cruise longitudinal lateral sharp-turn loop immelmann roll-off-the-bottom aerobatic
 
 CARGO ?= cargo
@@ -24,7 +24,7 @@ mujoco:
 	@./scripts/fetch-mujoco.sh
 
 demo: mujoco
-	$(FLAPPER) eval --policy policies/stage4/policy.safetensors --reference aerobatic --episodes 100 --seed 1 --out run/demo
+	$(FLAPPER) eval --policy policies/final/policy.safetensors --reference aerobatic --episodes 100 --seed 1 --out run/demo
 
 # Layout and lints, as CI checks them (rustfmt.toml, [workspace.lints] in Cargo.toml).
 lint:

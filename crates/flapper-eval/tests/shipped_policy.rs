@@ -1,8 +1,9 @@
 //! The committed policies still fly: stages 1-2 complete the 30 s cruise reference from the nominal
 //! start and from most randomized starts, close to the path; stage 3 flies the turns of `lateral` and
-//! the `loop` from randomized starts; stage 4 (the final controller) the aerobatic chain and the sharp
-//! turn. This guards every later change to the model, the task or the
-//! learner (a change that breaks the learned flight fails here).
+//! the `loop` from randomized starts; the hand-chained stage 4 the aerobatic chain and the sharp turn;
+//! the final controller (`policies/final`, from `flapper curriculum`) the aerobatic chain, the loop
+//! and the lateral turns. This guards every later change to the model, the task or the learner (a
+//! change that breaks the learned flight fails here).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -82,11 +83,24 @@ fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
 
 #[test]
 fn the_shipped_stage_4_policy_flies_the_aerobatic_chain_and_the_sharp_turn() {
-    // The final controller (`make demo`): 95/100 on `aerobatic` and 99/100 on `sharp-turn` (seed 11).
+    // 99/100 on `aerobatic` and 100/100 on `sharp-turn` (seed 11, 100 episodes).
     let results = check_tracks("stage4", "aerobatic", 4, 3, 1.0);
     assert!(
         results.iter().filter(|r| r.completed()).all(|r| r.went_inverted()),
         "the aerobatic chain's loop goes over the top"
     );
     check_tracks("stage4", "sharp-turn", 4, 4, 1.0);
+}
+
+#[test]
+fn the_final_controller_flies_the_aerobatic_chain_the_loop_and_the_lateral_turns() {
+    // `make demo` and `make evaluate` (seed 11, 100 episodes): aerobatic 90/100, loop 98/100, lateral
+    // 100/100 at RMS 0.246 m.
+    let results = check_tracks("final", "aerobatic", 4, 3, 1.0);
+    assert!(
+        results.iter().filter(|r| r.completed()).all(|r| r.went_inverted()),
+        "the aerobatic chain's loop goes over the top"
+    );
+    check_tracks("final", "loop", 4, 3, 1.0);
+    check_tracks("final", "lateral", 4, 4, 0.4);
 }

@@ -1,7 +1,7 @@
 """Fly a shipped policy through the Python binding, as `flapper eval` does (same starts, same
 numbers): completion (within 3 m to the end of the reference) and RMS tracking error per episode.
 
-    python crates/flapper-py/examples/evaluate_policy.py [--policy policies/stage4/policy.safetensors]
+    python crates/flapper-py/examples/evaluate_policy.py [--policy policies/final/policy.safetensors]
         [--reference lateral] [--episodes 10] [--seed 11]
 """
 
@@ -14,7 +14,7 @@ import flapper
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--policy", default="policies/stage4/policy.safetensors", help="default: the final controller")
+    parser.add_argument("--policy", default="policies/final/policy.safetensors", help="default: the final controller")
     parser.add_argument("--reference", default="lateral", help="a name (see below) or a CSV of time_s,x_m,y_m,z_m")
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=11)

@@ -294,7 +294,7 @@ fn training_cost(table: &mut Table) {
             let (steps, hours): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(0.0));
             let ratio = if hours > 0.0 { (steps / hours) / (30.0 / 5.0) } else { f64::NAN };
             (
-                format!("{} M steps in {} h (all shipped stages)", v[0], v[1]),
+                format!("{} M steps in {} h (the whole curriculum, validation included)", v[0], v[1]),
                 format!("{ratio:.1}x the paper's steps per hour"),
             )
         },

@@ -23,9 +23,9 @@ pub use experiments::TRACKED_REFERENCES;
 pub struct ReportSettings {
     /// The controller whose flights, analysis and robustness the report shows (the final one).
     pub policy: PathBuf,
-    /// The policies of the curriculum's stages in order (their folders hold `training.csv` and
-    /// `learning_curves.svg`): learning curves and the training table.
-    pub stage_policies: Vec<PathBuf>,
+    /// The folder of the curriculum run that trained `policy` (`summary.json`, `stageK/learning_curves.svg`):
+    /// the training table and learning curves.
+    pub curriculum: PathBuf,
     /// Randomized starts per named reference.
     pub episodes: usize,
     /// Episodes per setting of the robustness sweeps.
@@ -42,7 +42,7 @@ impl Default for ReportSettings {
     fn default() -> Self {
         Self {
             policy: shipped_file(FINAL_POLICY),
-            stage_policies: (1..=4).map(|k| shipped_file(&format!("policies/stage{k}/policy.safetensors"))).collect(),
+            curriculum: shipped_file(FINAL_CURRICULUM),
             episodes: 100,
             robustness_episodes: 50,
             seed: 1,
@@ -159,7 +159,7 @@ pub fn generate(
     } else {
         notes.push("pictures skipped (--no-pictures)".into());
     }
-    tables::training(&settings.stage_policies, &out.join("training"))?;
+    tables::training(&settings.curriculum, &out.join("training"))?;
     tables::model_tables(robot, &task, &out.join("tables"))?;
     let rows = comparison::compare(out)?;
     comparison::write_csv(&rows, &out.join("paper_vs_flapper.csv"))?;
@@ -170,13 +170,25 @@ pub fn generate(
 }
 
 /// Writes `bytes` to `path` complete or not at all.
+/// Writes `value` as JSON into `path` ([`flapper_files::write_json`]), creating its folder.
+fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), ReportError> {
+    create_parent(path)?;
+    flapper_files::write_json(path, value)
+        .map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() })?;
-    }
+    create_parent(path)?;
     flapper_plot::write_atomically(path, bytes)
         .map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
+fn create_parent(path: &Path) -> Result<(), ReportError> {
+    match path.parent() {
+        Some(dir) => std::fs::create_dir_all(dir)
+            .map_err(|e| ReportError::Write { path: dir.to_owned(), message: e.to_string() }),
+        None => Ok(()),
+    }
 }
 
 /// `flapper render`: one flight of `policy` on `reference` (a name or a CSV file) from the randomized
@@ -223,7 +235,9 @@ pub fn render_flight(
 }
 
 /// The final shipped controller, the report's default.
-pub const FINAL_POLICY: &str = "policies/stage4/policy.safetensors";
+pub const FINAL_POLICY: &str = "policies/final/policy.safetensors";
+/// The folder of the curriculum run that trained it.
+pub const FINAL_CURRICULUM: &str = "policies/final";
 
 /// A file shipped in the repository (a policy, a config) by its path from the repository's root: found
 /// from the current folder, or, when the program runs elsewhere, in the repository it was built from;

@@ -417,7 +417,7 @@ fn tables_ii_iii(out: &Path) -> Section {
     }
 }
 
-/// Training: the stages of the shipped policies and their learning curves.
+/// Training: the curriculum's stages and their learning curves.
 fn training(out: &Path) -> Section {
     let training = json(out, "training/training.json");
     let mut training_rows = Vec::new();
@@ -425,22 +425,39 @@ fn training(out: &Path) -> Section {
     for s in training["stages"].as_array().cloned().unwrap_or_default() {
         training_rows.push(vec![
             format!("{}", s["stage"]),
-            s["policy"].as_str().unwrap_or("").to_owned(),
+            s["name"].as_str().unwrap_or("").to_owned(),
             format!("{}", s["iterations"]),
-            format!("{}", s["runs"]),
             scaled(&s["env_steps"], 1.0 / 1e6, 2),
             scaled(&s["wall_time_s"], 1.0 / 60.0, 1),
+            format!("{}", s["selected_iteration"]),
+            fixed(&s["validation_score"], 1),
         ]);
         if let Some(file) = s["learning_curves"].as_str() {
             curves.push(figure(&format!("Learning curves of stage {}.", s["stage"]), &format!("training/{file}")));
         }
     }
-    let mut blocks = vec![Block::Table(
-        ["stage", "policy", "iterations", "runs", "env steps (M)", "wall time (min)"].map(String::from).to_vec(),
+    let mut blocks = vec![Block::Text(format!(
+        "The final controller comes from one command, `{}` (seed {}), whose folder is `{}`.",
+        training["command"].as_str().unwrap_or("-"),
+        training["seed"],
+        training["curriculum"].as_str().unwrap_or("-")
+    ))];
+    blocks.push(Block::Table(
+        [
+            "stage",
+            "name",
+            "iterations",
+            "env steps (M)",
+            "wall time (min)",
+            "handed over",
+            "its validation completed (%)",
+        ]
+        .map(String::from)
+        .to_vec(),
         training_rows,
-    )];
+    ));
     blocks.push(Block::Text(format!(
-        "In all: {} M steps in {} h ({} steps/s); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
+        "In all: {} M steps in {} h ({} steps/s, validation included); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
         scaled(&training["total_env_steps"], 1.0 / 1e6, 1),
         scaled(&training["total_wall_time_s"], 1.0 / 3600.0, 2),
         fixed(&training["steps_per_s"], 0)

@@ -1,68 +1,57 @@
-//! The tables the page shows besides the experiments: training of every stage (steps, wall time,
-//! learning curves), the model's Table II and the randomization of Table III as used.
+//! The tables the page shows besides the experiments: the final controller's curriculum (steps, wall
+//! time, selection and learning curves of every stage), the model's Table II and the randomization of Table III as used.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use flapper_sim::{FluidCoefficients, LIFTING_SURFACE_GEOMS, RobotModel};
 use flapper_task::TaskConfig;
 use serde_json::json;
 
-use crate::{ReportError, write_file};
+use crate::{ReportError, write_file, write_json};
 
-/// `training/training.json` (per stage: iterations, environment steps, wall time, from each policy's
-/// sidecar) and `training/stageK_learning_curves.svg` copied from each policy's folder.
-pub fn training(stage_policies: &[PathBuf], dir: &Path) -> Result<(), ReportError> {
+/// `training/training.json` and `training/stageK_learning_curves.svg`, from the folder a curriculum run
+/// left (`flapper curriculum --out DIR`; shipped as `policies/final/`): per stage its name, iterations,
+/// environment steps, wall time (training and validation), the iteration it handed over and that
+/// checkpoint's validation score, read from `DIR/summary.json`, and the stage's learning curves.
+pub fn training(curriculum: &Path, dir: &Path) -> Result<(), ReportError> {
+    let summary_path = curriculum.join("summary.json");
+    let read = |e: &dyn std::fmt::Display| ReportError::step(format!("reading '{}'", summary_path.display()), e);
+    let text = std::fs::read_to_string(&summary_path).map_err(|e| read(&e))?;
+    let summary: serde_json::Value = serde_json::from_str(&text).map_err(|e| read(&e))?;
     let mut stages = Vec::new();
-    for (k, policy) in stage_policies.iter().enumerate() {
-        let sidecar = policy.with_file_name(format!(
-            "{}.json",
-            policy.file_name().map_or("".into(), |n| n.to_string_lossy().into_owned())
-        ));
-        if !sidecar.exists() {
-            continue;
-        }
-        // A stage trained in several runs keeps the earlier runs' sidecars beside the policy
-        // (`earlier_run*.safetensors.json`): their iterations, steps and time count too.
-        let folder = policy.parent().unwrap_or(Path::new("."));
-        let mut sidecars: Vec<PathBuf> =
-            std::fs::read_dir(folder).map(|d| d.flatten().map(|e| e.path()).collect()).unwrap_or_default();
-        sidecars.retain(|p| {
-            p.file_name().is_some_and(|n| {
-                n.to_string_lossy().starts_with("earlier_run") && n.to_string_lossy().ends_with(".json")
-            })
-        });
-        sidecars.sort();
-        sidecars.insert(0, sidecar);
-        let runs = sidecars.len();
-        let (mut iterations, mut env_steps, mut wall_time_s) = (0.0, 0.0, 0.0);
-        for path in &sidecars {
-            let read = |e: &dyn std::fmt::Display| ReportError::step(format!("reading '{}'", path.display()), e);
-            let text = std::fs::read_to_string(path).map_err(|e| read(&e))?;
-            let run: serde_json::Value = serde_json::from_str(&text).map_err(|e| read(&e))?;
-            iterations += run["iteration"].as_f64().unwrap_or(0.0);
-            env_steps += run["env_steps"].as_f64().unwrap_or(0.0);
-            wall_time_s += run["wall_time_s"].as_f64().unwrap_or(0.0);
-        }
-        let curves = policy.with_file_name("learning_curves.svg");
-        let copied = format!("stage{}_learning_curves.svg", k + 1);
-        if let Ok(svg) = std::fs::read(&curves) {
-            write_file(&dir.join(&copied), &svg)?;
-        }
+    for stage in summary["stages"].as_array().cloned().unwrap_or_default() {
+        let number = stage["stage"].as_u64().unwrap_or(0);
+        let curves = curriculum.join(format!("stage{number}")).join("learning_curves.svg");
+        let copied = format!("stage{number}_learning_curves.svg");
+        let drawn = match std::fs::read(&curves) {
+            Ok(svg) => {
+                write_file(&dir.join(&copied), &svg)?;
+                json!(copied)
+            }
+            Err(_) => json!(null),
+        };
         stages.push(json!({
-            "stage": k + 1,
-            "policy": policy.display().to_string(),
-            "runs": runs,
-            "iterations": iterations,
-            "env_steps": env_steps,
-            "wall_time_s": wall_time_s,
-            "learning_curves": if curves.exists() { json!(copied) } else { json!(null) },
+            "stage": number,
+            "name": stage["name"],
+            "iterations": stage["iterations"],
+            "env_steps": stage["env_steps"],
+            "wall_time_s": stage["wall_time_s"],
+            "selected_iteration": stage["selected_iteration"],
+            "validation_score": stage["validation_score"],
+            "learning_curves": drawn,
         }));
     }
-    let total_steps: f64 = stages.iter().filter_map(|s| s["env_steps"].as_f64()).sum();
-    let total_time: f64 = stages.iter().filter_map(|s| s["wall_time_s"].as_f64()).sum();
-    let summary = json!({ "stages": stages, "total_env_steps": total_steps, "total_wall_time_s": total_time,
-        "steps_per_s": if total_time > 0.0 { total_steps / total_time } else { 0.0 } });
-    write_file(&dir.join("training.json"), serde_json::to_string_pretty(&summary).expect("plain data").as_bytes())
+    let (steps, time) = (summary["total_env_steps"].as_f64(), summary["total_wall_time_s"].as_f64());
+    let training = json!({
+        "curriculum": curriculum.display().to_string(),
+        "seed": summary["seed"],
+        "command": summary["command"],
+        "stages": stages,
+        "total_env_steps": steps,
+        "total_wall_time_s": time,
+        "steps_per_s": steps.zip(time).map(|(s, t)| if t > 0.0 { s / t } else { 0.0 }),
+    });
+    write_json(&dir.join("training.json"), &training)
 }
 
 /// `tables/tables.json`: Table II (the fluid coefficients of each lifting surface, read from the
@@ -94,5 +83,5 @@ pub fn model_tables(robot: &RobotModel, task: &TaskConfig, dir: &Path) -> Result
         "table_ii": surfaces,
         "table_iii": { "source": randomization.1, "randomization": randomization.0 },
     });
-    write_file(&dir.join("tables.json"), serde_json::to_string_pretty(&tables).expect("plain data").as_bytes())
+    write_json(&dir.join("tables.json"), &tables)
 }

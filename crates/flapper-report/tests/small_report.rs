@@ -46,7 +46,7 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
     std::fs::create_dir_all(&out).unwrap();
     let settings = ReportSettings {
         policy: root.join("policies/stage3/policy.safetensors"),
-        stage_policies: (1..=4).map(|k| root.join(format!("policies/stage{k}/policy.safetensors"))).collect(),
+        curriculum: root.join("policies/final"),
         episodes: 1,
         robustness_episodes: 1,
         seed: 3,
