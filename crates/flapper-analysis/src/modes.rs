@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flapper_eval::spectrum::fundamental;
-use flapper_eval::tracking::{Pilot, TrackingStep, evaluate_tracking};
+use flapper_eval::tracking::{Pilot, TrackingStep, energy_per_metre_j, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
@@ -200,27 +200,25 @@ fn segment_figures(
     start_s: f64,
     end_s: f64,
 ) -> SegmentFigures {
-    let inside: Vec<usize> =
-        (0..steps.len()).filter(|&k| steps[k].time_s >= start_s.max(SETTLE_S) && steps[k].time_s < end_s).collect();
+    let inside_at = |k: &usize| steps[*k].time_s >= start_s.max(SETTLE_S) && steps[*k].time_s < end_s;
+    let indices: Vec<usize> = (0..steps.len()).filter(inside_at).collect();
+    let inside: Vec<&TrackingStep> = indices.iter().map(|&k| &steps[k]).collect();
     let flap = ActuatedJoint::FlapLeft.index();
-    let angles: Vec<f64> = inside.iter().map(|&k| steps[k].joint_positions_rad[flap]).collect();
-    let (lo, hi) = angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+    let angles: Vec<f64> = inside.iter().map(|s| s.joint_positions_rad[flap]).collect();
     let found = fundamental(&angles, 1.0 / dt_s);
     let n = inside.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&TrackingStep) -> f64| inside.iter().map(|&k| f(&steps[k])).sum::<f64>() / n;
-    let energy_j: f64 = inside.iter().map(|&k| steps[k].absolute_power_w * dt_s).sum();
-    let distance_m: f64 = inside.windows(2).map(|w| (steps[w[1]].position_m - steps[w[0]].position_m).length()).sum();
-    let glide_fraction = inside.iter().filter(|&&k| held[k]).count() as f64 / n;
+    let mean = |f: &dyn Fn(&TrackingStep) -> f64| inside.iter().map(|s| f(s)).sum::<f64>() / n;
+    let glide_fraction = indices.iter().filter(|&&k| held[k]).count() as f64 / n;
     SegmentFigures {
         segment,
         start_s,
         end_s,
-        flap_amplitude_deg: (0.5 * (hi - lo)).to_degrees(),
+        flap_amplitude_deg: (0.5 * peak_to_peak(&angles)).to_degrees(),
         flap_fundamental_hz: found.map_or(f64::NAN, |f| f.frequency_hz),
         flap_energy_fraction: found.map_or(f64::NAN, |f| f.energy_fraction),
         mean_power_w: mean(&|s| s.mechanical_power_w),
         mean_absolute_power_w: mean(&|s| s.absolute_power_w),
-        energy_per_metre_j: energy_j / distance_m.max(1e-9),
+        energy_per_metre_j: energy_per_metre_j(&inside, dt_s),
         glide_fraction,
         glides: glide_fraction >= GLIDING_SEGMENT_FRACTION,
     }
@@ -233,13 +231,14 @@ pub fn held_wings(flap_rad: &[f64], dt_s: f64) -> Vec<bool> {
     let half = ((0.5 * GLIDE_WINDOW_S / dt_s).round() as usize).max(1);
     let limit = GLIDE_MAX_FLAP_RANGE_DEG.to_radians();
     (0..flap_rad.len())
-        .map(|k| {
-            let window = &flap_rad[k.saturating_sub(half)..(k + half + 1).min(flap_rad.len())];
-            let (lo, hi) =
-                window.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
-            hi - lo < limit
-        })
+        .map(|k| peak_to_peak(&flap_rad[k.saturating_sub(half)..(k + half + 1).min(flap_rad.len())]) < limit)
         .collect()
+}
+
+/// Largest minus smallest value (negative infinity for none).
+fn peak_to_peak(values: &[f64]) -> f64 {
+    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+    hi - lo
 }
 
 #[cfg(test)]

@@ -3,28 +3,28 @@
 
 use std::path::Path;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::config::CurriculumConfig;
 use crate::run::CurriculumError;
 use crate::selection::StageOutcome;
 
-#[derive(Debug, Clone, Serialize)]
-pub struct Summary<'a> {
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
     pub seed: u64,
-    pub command: &'a str,
-    pub stages: &'a [StageOutcome],
+    pub command: String,
+    pub stages: Vec<StageOutcome>,
     pub total_env_steps: u64,
     /// Training and validation of every stage (not the time a run stood interrupted).
     pub total_wall_time_s: f64,
 }
 
-impl<'a> Summary<'a> {
-    pub fn new(config: &CurriculumConfig, command: &'a str, stages: &'a [StageOutcome]) -> Self {
+impl Summary {
+    pub fn new(config: &CurriculumConfig, command: &str, stages: &[StageOutcome]) -> Self {
         Self {
             seed: config.seed,
-            command,
-            stages,
+            command: command.to_owned(),
+            stages: stages.to_vec(),
             total_env_steps: stages.iter().map(|s| s.env_steps).sum(),
             total_wall_time_s: stages.iter().map(|s| s.wall_time_s).sum(),
         }
@@ -33,5 +33,13 @@ impl<'a> Summary<'a> {
     pub fn write(&self, path: &Path) -> Result<(), CurriculumError> {
         flapper_files::write_json(path, self)
             .map_err(|e| CurriculumError::File { path: path.to_owned(), message: e.to_string() })
+    }
+
+    /// A curriculum folder's `summary.json` (`dir/summary.json`).
+    pub fn read(dir: &Path) -> Result<Self, CurriculumError> {
+        let path = dir.join("summary.json");
+        let file = |message: String| CurriculumError::File { path: path.clone(), message };
+        let text = std::fs::read_to_string(&path).map_err(|e| file(e.to_string()))?;
+        serde_json::from_str(&text).map_err(|e| file(e.to_string()))
     }
 }

@@ -103,9 +103,7 @@ impl EpisodeResult {
 
     /// Absolute mechanical energy over the distance flown.
     pub fn energy_per_metre_j(&self, period_s: f64) -> f64 {
-        let energy: f64 = self.steps.iter().map(|s| s.absolute_power_w * period_s).sum();
-        let distance: f64 = self.steps.windows(2).map(|w| (w[1].position_m - w[0].position_m).length()).sum();
-        energy / distance.max(1e-9)
+        energy_per_metre_j(&self.steps, period_s)
     }
 
     /// The fundamental of `joint`'s angle after the first second (the launch transient).
@@ -114,6 +112,14 @@ impl EpisodeResult {
             self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect();
         fundamental(&signal, 1.0 / period_s)
     }
+}
+
+/// Absolute mechanical energy over the distance flown by consecutive control steps `period_s` apart
+/// (a whole episode, or a stretch of one).
+pub fn energy_per_metre_j<S: std::borrow::Borrow<TrackingStep>>(steps: &[S], period_s: f64) -> f64 {
+    let energy: f64 = steps.iter().map(|s| s.borrow().absolute_power_w * period_s).sum();
+    let distance: f64 = steps.windows(2).map(|w| (w[1].borrow().position_m - w[0].borrow().position_m).length()).sum();
+    energy / distance.max(1e-9)
 }
 
 /// The speeds along a path (m/s) the final controller is known to track: its level-flight envelope

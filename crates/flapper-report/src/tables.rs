@@ -14,15 +14,12 @@ use crate::{ReportError, write_file, write_json};
 /// environment steps, wall time (training and validation), the iteration it handed over and that
 /// checkpoint's validation score, read from `DIR/summary.json`, and the stage's learning curves.
 pub fn training(curriculum: &Path, dir: &Path) -> Result<(), ReportError> {
-    let summary_path = curriculum.join("summary.json");
-    let read = |e: &dyn std::fmt::Display| ReportError::step(format!("reading '{}'", summary_path.display()), e);
-    let text = std::fs::read_to_string(&summary_path).map_err(|e| read(&e))?;
-    let summary: serde_json::Value = serde_json::from_str(&text).map_err(|e| read(&e))?;
+    let summary = flapper_curriculum::summary::Summary::read(curriculum)
+        .map_err(|e| ReportError::step("the final controller's curriculum", e))?;
     let mut stages = Vec::new();
-    for stage in summary["stages"].as_array().cloned().unwrap_or_default() {
-        let number = stage["stage"].as_u64().unwrap_or(0);
-        let curves = curriculum.join(format!("stage{number}")).join("learning_curves.svg");
-        let copied = format!("stage{number}_learning_curves.svg");
+    for stage in &summary.stages {
+        let curves = curriculum.join(format!("stage{}", stage.stage)).join("learning_curves.svg");
+        let copied = format!("stage{}_learning_curves.svg", stage.stage);
         let drawn = match std::fs::read(&curves) {
             Ok(svg) => {
                 write_file(&dir.join(&copied), &svg)?;
@@ -31,25 +28,25 @@ pub fn training(curriculum: &Path, dir: &Path) -> Result<(), ReportError> {
             Err(_) => json!(null),
         };
         stages.push(json!({
-            "stage": number,
-            "name": stage["name"],
-            "iterations": stage["iterations"],
-            "env_steps": stage["env_steps"],
-            "wall_time_s": stage["wall_time_s"],
-            "selected_iteration": stage["selected_iteration"],
-            "validation_score": stage["validation_score"],
+            "stage": stage.stage,
+            "name": stage.name,
+            "iterations": stage.iterations,
+            "env_steps": stage.env_steps,
+            "wall_time_s": stage.wall_time_s,
+            "selected_iteration": stage.selected_iteration,
+            "validation_score": stage.validation_score,
             "learning_curves": drawn,
         }));
     }
-    let (steps, time) = (summary["total_env_steps"].as_f64(), summary["total_wall_time_s"].as_f64());
+    let (steps, time) = (summary.total_env_steps as f64, summary.total_wall_time_s);
     let training = json!({
         "curriculum": curriculum.display().to_string(),
-        "seed": summary["seed"],
-        "command": summary["command"],
+        "seed": summary.seed,
+        "command": summary.command,
         "stages": stages,
         "total_env_steps": steps,
         "total_wall_time_s": time,
-        "steps_per_s": steps.zip(time).map(|(s, t)| if t > 0.0 { s / t } else { 0.0 }),
+        "steps_per_s": if time > 0.0 { steps / time } else { 0.0 },
     });
     write_json(&dir.join("training.json"), &training)
 }
