@@ -82,8 +82,13 @@ pub struct ValidationConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Gate {
-    /// Every validation reference completed in at least this share of its episodes (percent).
+    /// Every validation reference completed in at least this share of its episodes (percent); the
+    /// procedural ones too unless `procedural_completed_percent` is given.
     pub completed_percent: f64,
+    /// The procedural references judged together: all their episodes completed in at least this share
+    /// (percent). A path drawn at random may ask for more than the robot can fly; one such path must
+    /// not hold the gate shut while the named references and the other drawn paths are flown.
+    pub procedural_completed_percent: Option<f64>,
     /// The mean RMS tracking error over all validation episodes at most this (m).
     pub max_rms_m: Option<f64>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
@@ -120,11 +125,15 @@ impl CurriculumConfig {
                 return Err(bad("validation needs at least one reference (or procedural > 0) and episodes > 0".into()));
             }
             let g = &stage.gate;
-            if !(0.0..=100.0).contains(&g.completed_percent) || g.max_rms_m.is_some_and(|r| !(r > 0.0 && r.is_finite()))
+            let percent = |p: f64| (0.0..=100.0).contains(&p);
+            if !percent(g.completed_percent)
+                || !g.procedural_completed_percent.is_none_or(percent)
+                || g.max_rms_m.is_some_and(|r| !(r > 0.0 && r.is_finite()))
             {
                 return Err(bad(format!(
-                    "gate.completed_percent must be in [0, 100] (got {}) and gate.max_rms_m positive (got {:?})",
-                    g.completed_percent, g.max_rms_m
+                    "gate.completed_percent and gate.procedural_completed_percent must be in [0, 100] (got {} and \
+                     {:?}) and gate.max_rms_m positive (got {:?})",
+                    g.completed_percent, g.procedural_completed_percent, g.max_rms_m
                 )));
             }
             if let Some(std) = stage.start_noise_std

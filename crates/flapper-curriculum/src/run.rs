@@ -290,8 +290,14 @@ fn select(
 
 /// The gate in words, for messages.
 pub fn describe_gate(gate: &crate::config::Gate) -> String {
-    let mut text =
-        format!("every validation reference completed in at least {}% of its episodes", gate.completed_percent);
+    let mut text = match gate.procedural_completed_percent {
+        None => format!("every validation reference completed in at least {}% of its episodes", gate.completed_percent),
+        Some(drawn) => format!(
+            "every named validation reference completed in at least {}% of its episodes, the procedural ones in \
+             {drawn}% of theirs together",
+            gate.completed_percent
+        ),
+    };
     if let Some(rms) = gate.max_rms_m {
         text.push_str(&format!(", mean RMS error at most {rms} m"));
     }

@@ -180,7 +180,12 @@ mod tests {
     fn the_best_checkpoint_is_chosen_by_completion_then_error_never_simply_the_last() {
         let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)] };
         assert_eq!(selection.best().unwrap().iteration, 30);
-        let gate = Gate { completed_percent: 100.0, max_rms_m: Some(0.35), min_iterations: 0 };
+        let gate = Gate {
+            completed_percent: 100.0,
+            procedural_completed_percent: None,
+            max_rms_m: Some(0.35),
+            min_iterations: 0,
+        };
         assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
         let later = Gate { min_iterations: 35, ..gate };
         assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
