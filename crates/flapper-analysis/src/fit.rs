@@ -1,9 +1,10 @@
-//! Third-order continuous-time transfer functions fitted to sampled input-output records, in the
-//! paper's form (eqs. 9-11): Y(s)/U(s) = (b2 s^2 + b1 s + b0) / (s^3 + a2 s^2 + a1 s + a0).
+//! Continuous-time transfer functions fitted to sampled input-output records: n poles and n - 1
+//! zeros, the paper's form (eqs. 9-11) for n = 3: Y(s)/U(s) = (b2 s^2 + b1 s + b0) / (s^3 + a2 s^2 +
+//! a1 s + a0).
 //!
 //! Method: state-variable filtering (Young's SVF; Ljung, System Identification, 2nd ed., sec. 7.4).
-//! Input and output both pass through the same filter 1/(s + lambda)^3, whose states are the filtered
-//! signal and its first three derivatives. The differential equation of the model holds for the
+//! Input and output both pass through the same filter 1/(s + lambda)^n, whose states are the filtered
+//! signal and its first n derivatives. The differential equation of the model holds for the
 //! filtered signals exactly as for the raw ones, so
 //! y_f''' = -a2 y_f'' - a1 y_f' - a0 y_f + b2 u_f'' + b1 u_f' + b0 u_f
 //! is linear in the coefficients: ordinary least squares (nalgebra's SVD). Several axes can share the
@@ -36,49 +37,69 @@ impl Default for FitSettings {
     }
 }
 
-/// `signal` through 1/(s + lambda)^3 from rest: per sample, the filtered signal and its derivatives
-/// of order 0 to 3 (RK4, input interpolated linearly between samples).
-pub fn state_variable_filter(signal: &[f64], dt_s: f64, lambda: f64) -> Vec<[f64; 4]> {
-    // (s + l)^3 = s^3 + 3 l s^2 + 3 l^2 s + l^3; states x = (w, w', w'').
-    let (d2, d1, d0) = (3.0 * lambda, 3.0 * lambda * lambda, lambda.powi(3));
-    let third = |x: [f64; 3], u: f64| u - d2 * x[2] - d1 * x[1] - d0 * x[0];
-    let derivative = |x: [f64; 3], u: f64| [x[1], x[2], third(x, u)];
-    let step = |x: [f64; 3], h: f64, k: [f64; 3]| [x[0] + h * k[0], x[1] + h * k[1], x[2] + h * k[2]];
-    let mut x = [0.0; 3];
+/// `signal` through 1/(s + lambda)^`order` from rest: per sample, the filtered signal and its
+/// derivatives of order 0 to `order` (RK4, input interpolated linearly between samples).
+pub fn state_variable_filter(signal: &[f64], dt_s: f64, lambda: f64, order: usize) -> Vec<Vec<f64>> {
+    // (s + l)^n = sum_i C(n, i) l^(n - i) s^i; states x = (w, w', ..., w^(n-1)).
+    let binomial = |n: usize, i: usize| (0..i).fold(1.0, |c, k| c * (n - k) as f64 / (k + 1) as f64);
+    let d: Vec<f64> = (0..order).map(|i| binomial(order, i) * lambda.powi((order - i) as i32)).collect();
+    let highest = |x: &[f64], u: f64| u - x.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>();
+    let derivative = |x: &[f64], u: f64| -> Vec<f64> {
+        let mut dx: Vec<f64> = x[1..].to_vec();
+        dx.push(highest(x, u));
+        dx
+    };
+    let step = |x: &[f64], h: f64, k: &[f64]| x.iter().zip(k).map(|(a, b)| a + h * b).collect::<Vec<f64>>();
+    let mut x = vec![0.0; order];
     let mut out = Vec::with_capacity(signal.len());
     for k in 0..signal.len() {
-        out.push([x[0], x[1], x[2], third(x, signal[k])]);
+        let mut row = x.clone();
+        row.push(highest(&x, signal[k]));
+        out.push(row);
         let (u0, u1) = (signal[k], *signal.get(k + 1).unwrap_or(&signal[k]));
         let um = 0.5 * (u0 + u1);
-        let k1 = derivative(x, u0);
-        let k2 = derivative(step(x, 0.5 * dt_s, k1), um);
-        let k3 = derivative(step(x, 0.5 * dt_s, k2), um);
-        let k4 = derivative(step(x, dt_s, k3), u1);
-        for i in 0..3 {
+        let k1 = derivative(&x, u0);
+        let k2 = derivative(&step(&x, 0.5 * dt_s, &k1), um);
+        let k3 = derivative(&step(&x, 0.5 * dt_s, &k2), um);
+        let k4 = derivative(&step(&x, dt_s, &k3), u1);
+        for i in 0..order {
             x[i] += dt_s / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
     }
     out
 }
 
-/// Fits one third-order model per axis, all with one shared denominator (`axes[i]` holds axis i's
-/// records). `None` if there is too little data or the least-squares problem is degenerate.
+/// Fits one third-order model per axis (the paper's eq. 9 form), all with one shared denominator
+/// (`axes[i]` holds axis i's records). `None` if there is too little data or the least-squares
+/// problem is degenerate.
 pub fn fit_common_denominator(axes: &[Vec<Record>], settings: &FitSettings) -> Option<Vec<TransferFunction>> {
+    fit_order(axes, settings, 3)
+}
+
+/// As [`fit_common_denominator`] for `order` poles and `order - 1` zeros:
+/// y_f^(n) = -a_(n-1) y_f^(n-1) - ... - a0 y_f + b_(n-1) u_f^(n-1) + ... + b0 u_f.
+pub fn fit_order(axes: &[Vec<Record>], settings: &FitSettings, order: usize) -> Option<Vec<TransferFunction>> {
+    if order == 0 {
+        return None;
+    }
     let skip = (settings.skip_s / settings.dt_s).ceil() as usize;
-    let columns = 3 + 3 * axes.len();
+    let columns = order + order * axes.len();
     let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
     for (axis, records) in axes.iter().enumerate() {
         for record in records {
             if record.input.len() != record.output.len() {
                 return None;
             }
-            let u = state_variable_filter(&record.input, settings.dt_s, settings.filter_pole_radps);
-            let y = state_variable_filter(&record.output, settings.dt_s, settings.filter_pole_radps);
+            let u = state_variable_filter(&record.input, settings.dt_s, settings.filter_pole_radps, order);
+            let y = state_variable_filter(&record.output, settings.dt_s, settings.filter_pole_radps, order);
             for k in skip..u.len() {
+                // Coefficients highest power first: a_(n-1) .. a_0, then this axis's b_(n-1) .. b_0.
                 let mut row = vec![0.0; columns];
-                row[..3].copy_from_slice(&[-y[k][2], -y[k][1], -y[k][0]]);
-                row[3 + 3 * axis..6 + 3 * axis].copy_from_slice(&[u[k][2], u[k][1], u[k][0]]);
-                rows.push((row, y[k][3]));
+                for i in 0..order {
+                    row[i] = -y[k][order - 1 - i];
+                    row[order + order * axis + i] = u[k][order - 1 - i];
+                }
+                rows.push((row, y[k][order]));
             }
         }
     }
@@ -91,9 +112,14 @@ pub fn fit_common_denominator(axes: &[Vec<Record>], settings: &FitSettings) -> O
     if !theta.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let denominator = vec![1.0, theta[0], theta[1], theta[2]];
+    let denominator: Vec<f64> = std::iter::once(1.0).chain(theta.rows(0, order).iter().copied()).collect();
     (0..axes.len())
-        .map(|axis| TransferFunction::new(theta.rows(3 + 3 * axis, 3).iter().copied().collect(), denominator.clone()))
+        .map(|axis| {
+            TransferFunction::new(
+                theta.rows(order + order * axis, order).iter().copied().collect(),
+                denominator.clone(),
+            )
+        })
         .collect()
 }
 

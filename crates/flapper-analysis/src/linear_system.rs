@@ -89,6 +89,12 @@ impl TransferFunction {
         n / d
     }
 
+    /// N(j omega) / D(j omega): gain and phase of the steady response to a sine of `omega_radps`.
+    pub fn frequency_response(&self, omega_radps: f64) -> Complex64 {
+        let s = Complex64::new(0.0, omega_radps);
+        evaluate(&self.numerator, s) / evaluate(&self.denominator, s)
+    }
+
     /// Every pole in the open left half plane.
     pub fn bibo_stable(&self) -> bool {
         self.poles().iter().all(|p| p.re < 0.0)

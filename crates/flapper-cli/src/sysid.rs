@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use anyhow::{Result, bail};
 use flapper_analysis::linear_system::polynomial_text as polynomial;
-use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
+use flapper_analysis::sysid::{AxisModel, SysidSettings, fly_records, identify, write_sysid_files};
 use flapper_eval::load_flight_policy;
 use flapper_sim::RobotModel;
 
@@ -17,63 +17,66 @@ fn roots(pairs: &[[f64; 2]]) -> String {
         .join(", ")
 }
 
-pub fn sysid_command(
-    robot: &RobotModel,
-    policy_path: &Path,
-    seed: u64,
-    amplitude_m: f64,
-    input_lead_s: f64,
-    out: &Path,
-) -> Result<()> {
+pub fn sysid_command(robot: &RobotModel, policy_path: &Path, args: &SysidArgs) -> Result<()> {
+    let amplitude_m = args.amplitude_m;
     if !(amplitude_m.is_finite() && amplitude_m > 0.0 && amplitude_m <= 1.0) {
         bail!("--amplitude-m must be in (0, 1] m, got {amplitude_m}");
     }
-    let (policy, task) = load_flight_policy(policy_path)?;
-    if !(0.0..=0.6).contains(&input_lead_s) {
-        bail!("--input-lead-s must be in [0, 0.6] s (the policy's lookahead), got {input_lead_s}");
+    if let Some(lead) = args.input_lead_s
+        && !(0.0..=0.6).contains(&lead)
+    {
+        bail!("--input-lead-s must be in [0, 0.6] s (the policy's lookahead), got {lead}");
     }
-    let settings = SysidSettings { seed, amplitude_m, input_lead_s, ..SysidSettings::default() };
-    crate::output_dir::prepare_output_dir(out)?;
+    let (policy, task) = load_flight_policy(policy_path)?;
+    let settings =
+        SysidSettings { seed: args.seed, amplitude_m, input_lead_s: args.input_lead_s, ..SysidSettings::default() };
+    crate::output_dir::prepare_output_dir(&args.out)?;
     eprintln!(
-        "flying {} identification and {} validation records of {:.0} s (cruise {} m/s, target perturbed by {} m RMS per axis, {}-{} Hz)...",
+        "flying {} identification and {} validation records of {:.0} s per axis, one axis perturbed at a time (cruise \
+         {} m/s, target perturbed by {} m RMS, harmonics of {} Hz over {}-{} Hz, {} periods averaged)...",
         settings.identification_records,
         settings.validation_records,
-        settings.record_s,
+        settings.record_s(),
         settings.cruise_speed_mps,
         amplitude_m,
+        1.0 / settings.period_s,
         settings.band_hz[0],
-        settings.band_hz[1]
+        settings.band_hz[1],
+        settings.averaged_periods
     );
     let records = fly_records(robot, Arc::new(policy), &task, &settings)?;
-    let (report, models) = identify(&records, &settings)?;
-    let written = write_sysid_files(out, &report, &models, &records)?;
+    let identified = identify(&records, &settings)?;
+    let written = write_sysid_files(&args.out, &identified, &records)?;
+    let report = &identified.report;
     println!(
-        "closed loop of {}: desired position -> flown position (deviations from a 3.8 m/s cruise)",
+        "closed loop of {}: desired position ahead -> flown position (deviations from a 3.8 m/s cruise)",
         policy_path.display()
     );
-    println!("common denominator: {}", polynomial(&report.common.x.denominator));
-    for (axis, m) in report.common.each() {
-        println!("Y_{axis}(s) = ({}) / D(s)", polynomial(&m.numerator));
+    let verdicts = |m: &AxisModel| {
+        format!(
+            "validation MSE {:.3e} m^2, fit {:.1}%; {}, {}",
+            m.mse_validation,
+            m.fit_percent,
+            if m.bibo_stable { "BIBO stable" } else { "NOT BIBO stable" },
+            if m.minimum_phase { "minimum phase" } else { "NOT minimum phase" }
+        )
+    };
+    for (axis, m) in report.per_axis.each() {
+        println!(
+            "Y_{axis}(s) = ({}) / ({}), input lead {:.2} s",
+            polynomial(&m.numerator),
+            polynomial(&m.denominator),
+            m.input_lead_s
+        );
         println!("    poles {}; zeros {}; DC gain {:.3}", roots(&m.poles), roots(&m.zeros), m.dc_gain);
-        println!(
-            "    validation MSE {:.3e} m^2, fit {:.1}%; {}, {}",
-            m.mse_validation,
-            m.fit_percent,
-            if m.bibo_stable { "BIBO stable" } else { "NOT BIBO stable" },
-            if m.minimum_phase { "minimum phase" } else { "NOT minimum phase" }
-        );
+        println!("    {}", verdicts(m));
     }
-    println!("per-axis denominators (for comparison):");
-    for (axis, m) in report.per_axis_denominators.each() {
-        println!(
-            "  {axis}: poles {}; zeros {}; validation MSE {:.3e} m^2, fit {:.1}%; {}, {}",
-            roots(&m.poles),
-            roots(&m.zeros),
-            m.mse_validation,
-            m.fit_percent,
-            if m.bibo_stable { "BIBO stable" } else { "NOT BIBO stable" },
-            if m.minimum_phase { "minimum phase" } else { "NOT minimum phase" }
-        );
+    println!(
+        "the paper's form, one denominator for the three axes ({}):",
+        polynomial(&report.common_denominator.x.denominator)
+    );
+    for (axis, m) in report.common_denominator.each() {
+        println!("  {axis}: poles {}; zeros {}; {}", roots(&m.poles), roots(&m.zeros), verdicts(m));
     }
     for path in written {
         println!("wrote {}", path.display());
@@ -94,9 +97,10 @@ pub struct SysidArgs {
     #[arg(long, default_value_t = 0.15)]
     pub amplitude_m: f64,
     /// Take as input the desired position this far ahead (s, up to the 0.6 s the policy sees
-    /// ahead); 0 is the paper's input, the current desired position.
-    #[arg(long, default_value_t = 0.0)]
-    pub input_lead_s: f64,
+    /// ahead; 0 is the paper's input, the current desired position). Default: per axis, the lead
+    /// whose model best predicts the identification records.
+    #[arg(long)]
+    pub input_lead_s: Option<f64>,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/sysid")]
     pub out: PathBuf,
@@ -104,5 +108,5 @@ pub struct SysidArgs {
 
 pub fn run(args: SysidArgs, model: Option<&Path>) -> Result<()> {
     let robot = crate::robot::load(model)?;
-    sysid_command(&robot, &args.policy, args.seed, args.amplitude_m, args.input_lead_s, &args.out)
+    sysid_command(&robot, &args.policy, &args)
 }

@@ -330,11 +330,13 @@ fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
         assert_eq!(m["poles"].as_array().unwrap().len(), 3);
         assert!(m["mse_validation"].as_f64().unwrap() > 0.0 && m["fit_percent"].as_f64().unwrap() > 0.0, "{m}");
         assert!(m["bibo_stable"].is_boolean() && m["minimum_phase"].is_boolean());
+        let lead = m["input_lead_s"].as_f64().unwrap();
+        assert!((0.0..=0.6).contains(&lead), "the lead is estimated within the policy's lookahead: {m}");
     }
     let io = std::fs::read_to_string(sysid.join("sysid_io.csv")).unwrap();
-    assert!(io.starts_with("time_s,u_x,u_y,u_z,y_x,y_y,y_z,set\n"), "{}", &io[..80]);
-    assert!(io.contains(",identification\n") && io.contains(",validation\n"));
-    for file in ["pole_zero.svg", "validation.svg"] {
+    assert!(io.starts_with("time_s,u_x,u_y,u_z,y_x,y_y,y_z,set,record\n"), "{}", &io[..80]);
+    assert!(io.contains(",identification,0\n") && io.contains(",validation,0\n"));
+    for file in ["pole_zero.svg", "validation.svg", "bode.svg"] {
         assert!(sysid.join(file).metadata().unwrap().len() > 1000, "{file}");
     }
 

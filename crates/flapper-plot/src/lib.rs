@@ -208,3 +208,73 @@ fn draw_pole_zero(area: &DrawingArea<SVGBackend, Shift>, map: &PoleZeroMap) -> R
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
     Ok(())
 }
+
+/// One axis of a Bode plot: the model's response as a curve, the measured one as points. Each entry
+/// is (frequency in Hz, magnitude in dB, phase in degrees).
+pub struct BodeAxis {
+    pub title: String,
+    pub model: Vec<(f64, f64, f64)>,
+    pub measured: Vec<(f64, f64, f64)>,
+}
+
+/// Draws one row per axis, magnitude left and phase right, on a logarithmic frequency axis.
+pub fn draw_bode(path: &Path, axes: &[BodeAxis]) -> Result<(), String> {
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1100, 330 * axes.len().max(1) as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| error(&e))?;
+    let areas = root.split_evenly((axes.len().max(1), 2));
+    for (row, axis) in axes.iter().enumerate() {
+        let magnitude = |p: &(f64, f64, f64)| (p.0, p.1);
+        let phase = |p: &(f64, f64, f64)| (p.0, p.2);
+        draw_bode_panel(&areas[2 * row], &format!("{}: magnitude", axis.title), "magnitude (dB)", axis, &magnitude)
+            .map_err(|e| error(&e))?;
+        draw_bode_panel(&areas[2 * row + 1], &format!("{}: phase", axis.title), "phase (deg)", axis, &phase)
+            .map_err(|e| error(&e))?;
+    }
+    root.present().map_err(|e| error(&e))?;
+    drop(areas);
+    drop(root);
+    write_atomically(path, svg.as_bytes()).map_err(|e| error(&e))
+}
+
+fn draw_bode_panel(
+    area: &DrawingArea<SVGBackend, Shift>,
+    title: &str,
+    y_label: &str,
+    axis: &BodeAxis,
+    pick: &dyn Fn(&(f64, f64, f64)) -> (f64, f64),
+) -> Result<(), Box<dyn std::error::Error>> {
+    let points: Vec<(f64, f64)> =
+        axis.model.iter().chain(&axis.measured).map(pick).filter(|(f, v)| *f > 0.0 && v.is_finite()).collect();
+    let (f0, f1) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
+    let (v0, v1) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let (f0, f1) = if f0 < f1 { (f0, f1) } else { (0.01, 1.0) };
+    let (v0, v1) = if v0 < v1 { (v0, v1) } else { (-1.0, 1.0) };
+    let pad = 0.05 * (v1 - v0).max(1.0);
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 18))
+        .margin(8)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d((f0..f1).log_scale(), (v0 - pad)..(v1 + pad))?;
+    chart
+        .configure_mesh()
+        .x_desc("frequency (Hz)")
+        .y_desc(y_label)
+        .x_label_formatter(&|f| format!("{}", (f * 1000.0).round() / 1000.0))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()?;
+    let model_color = COLORS[1];
+    chart
+        .draw_series(LineSeries::new(axis.model.iter().map(pick), model_color.stroke_width(2)))?
+        .label("model")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], model_color.stroke_width(2)));
+    let measured_color = COLORS[0];
+    chart
+        .draw_series(axis.measured.iter().map(|p| Circle::new(pick(p), 4, measured_color.stroke_width(2))))?
+        .label("measured (flown records)")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, measured_color.stroke_width(2)));
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    Ok(())
+}

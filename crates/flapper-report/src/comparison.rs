@@ -228,6 +228,26 @@ fn identification(table: &mut Table) {
             )
         },
     );
+    table.row(
+        "identified model's fit to validation flights (input: the target point ahead, lead estimated)",
+        "not reported (input: the current desired position)",
+        ["x", "y", "z"]
+            .iter()
+            .flat_map(|a| {
+                [
+                    Source::new(sysid, &format!("/{a}/fit_percent"), 1.0, Format::Fixed(1)),
+                    Source::new(sysid, &format!("/{a}/input_lead_s"), 1.0, Format::Fixed(2)),
+                ]
+            })
+            .collect(),
+        &|v| {
+            let worst = [&v[0], &v[2], &v[4]].iter().filter_map(|x| x.parse::<f64>().ok()).fold(100.0, f64::min);
+            (
+                format!("x {}% ({} s ahead) / y {}% ({} s) / z {}% ({} s)", v[0], v[1], v[2], v[3], v[4], v[5]),
+                if worst >= 80.0 { "predicts the flight".into() } else { format!("weak: {worst:.0}% on one axis") },
+            )
+        },
+    );
     for (claim, key) in [
         ("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable"),
         ("zeros in the left half plane (minimum phase)", "minimum_phase"),

@@ -74,9 +74,9 @@ pub fn sysid(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, di
     let settings = SysidSettings::default();
     let fail = |e: flapper_analysis::AnalysisError| ReportError::step("system identification", e);
     let records = fly_records(robot, policy, task, &settings).map_err(fail)?;
-    let (report, models) = identify(&records, &settings).map_err(fail)?;
+    let identified = identify(&records, &settings).map_err(fail)?;
     create(dir)?;
-    write_sysid_files(dir, &report, &models, &records).map_err(fail)?;
+    write_sysid_files(dir, &identified, &records).map_err(fail)?;
     Ok(())
 }
 

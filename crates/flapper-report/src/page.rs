@@ -149,6 +149,7 @@ fn fig5_sysid(out: &Path) -> Section {
             axis.to_owned(),
             polynomial(&m["numerator"]),
             polynomial(&m["denominator"]),
+            fixed(&m["input_lead_s"], 2),
             m["mse_validation"].as_f64().map_or("-".into(), |x| format!("{x:.2e}")),
             fixed(&m["fit_percent"], 1),
             format!("{}", m["bibo_stable"]),
@@ -159,16 +160,33 @@ fn fig5_sysid(out: &Path) -> Section {
         title: "Fig. 5: system identification".into(),
         blocks: vec![
             Block::Table(
-                ["axis", "numerator", "denominator", "validation MSE (m^2)", "fit (%)", "BIBO stable", "minimum phase"]
-                    .map(String::from)
-                    .to_vec(),
+                [
+                    "axis",
+                    "numerator",
+                    "denominator",
+                    "input lead (s)",
+                    "validation MSE (m^2)",
+                    "fit (%)",
+                    "BIBO stable",
+                    "minimum phase",
+                ]
+                .map(String::from)
+                .to_vec(),
                 tf_rows,
             ),
             figure(
                 "Poles (x) and zeros (o) of the identified closed loop, desired to flown position.",
                 "sysid/pole_zero.svg",
             ),
-            figure("Validation: flown position against the identified models' prediction.", "sysid/validation.svg"),
+            figure(
+                "Validation: flown position (one axis perturbed at a time, periods averaged) against the identified \
+                 models' prediction from the target point ahead.",
+                "sysid/validation.svg",
+            ),
+            figure(
+                "Bode plots: the identified models and the frequency response measured at the multisine's harmonics.",
+                "sysid/bode.svg",
+            ),
         ],
     }
 }

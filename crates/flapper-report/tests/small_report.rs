@@ -12,9 +12,10 @@ fn repository() -> PathBuf {
 }
 
 /// The files behind the paper's figures (Fig. 1-3, 5-11) and the learning curves.
-const FIGURES: [&str; 15] = [
+const FIGURES: [&str; 16] = [
     "tracking/cruise/joints.svg",
     "sysid/pole_zero.svg",
+    "sysid/bode.svg",
     "sysid/validation.svg",
     "phase/phase_climb.svg",
     "phase/phase_turn.svg",
