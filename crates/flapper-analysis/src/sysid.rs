@@ -362,7 +362,7 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<Identified
     };
     let mut separate = Vec::new();
     let mut leads = [0; 3];
-    for axis in 0..3 {
+    for (axis, lead_of_axis) in leads.iter_mut().enumerate() {
         let best = candidates
             .par_iter()
             .filter_map(|&lead| {
@@ -374,7 +374,7 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<Identified
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .ok_or(AnalysisError::FitFailed)?;
-        leads[axis] = best.1;
+        *lead_of_axis = best.1;
         separate.push(best.2);
     }
     let identification: Vec<Vec<Record>> = (0..3).map(|a| set(DataSet::Identification, a, leads[a])).collect();
@@ -570,7 +570,10 @@ pub fn write_sysid_files(
             let (_, _, axes, time_s) = paired.iter().find(|p| p.0 == DataSet::Validation)?;
             let record = &axes[a];
             let predicted = models[a].simulate(&record.input, CONTROL_PERIOD_S);
-            let series = |values: &[f64]| time_s.iter().zip(values).skip(skip).map(|(&t, &v)| (t, v)).collect();
+            // Three periods after the left-out first one: the rest repeats them (the periods are averaged).
+            let shown = 3 * skip;
+            let series =
+                |values: &[f64]| time_s.iter().zip(values).skip(skip).take(shown).map(|(&t, &v)| (t, v)).collect();
             let m = report.per_axis.each()[a].1;
             Some(Panel {
                 title: format!(

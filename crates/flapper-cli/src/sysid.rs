@@ -27,9 +27,17 @@ pub fn sysid_command(robot: &RobotModel, policy_path: &Path, args: &SysidArgs) -
     {
         bail!("--input-lead-s must be in [0, 0.6] s (the policy's lookahead), got {lead}");
     }
+    if !(1..=100).contains(&args.averaged_periods) {
+        bail!("--averaged-periods must be between 1 and 100, got {}", args.averaged_periods);
+    }
     let (policy, task) = load_flight_policy(policy_path)?;
-    let settings =
-        SysidSettings { seed: args.seed, amplitude_m, input_lead_s: args.input_lead_s, ..SysidSettings::default() };
+    let settings = SysidSettings {
+        seed: args.seed,
+        amplitude_m,
+        input_lead_s: args.input_lead_s,
+        averaged_periods: args.averaged_periods,
+        ..SysidSettings::default()
+    };
     crate::output_dir::prepare_output_dir(&args.out)?;
     eprintln!(
         "flying {} identification and {} validation records of {:.0} s per axis, one axis perturbed at a time (cruise \
@@ -101,6 +109,10 @@ pub struct SysidArgs {
     /// whose model best predicts the identification records.
     #[arg(long)]
     pub input_lead_s: Option<f64>,
+    /// Periods of 20 s flown after the first and averaged into one: more average out more of the flight
+    /// that does not follow the input, and take longer (a record lasts 20 s x (1 + this)).
+    #[arg(long, default_value_t = SysidSettings::default().averaged_periods)]
+    pub averaged_periods: usize,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/sysid")]
     pub out: PathBuf,

@@ -319,7 +319,7 @@ fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
     let out = scratch("analysis");
     let policy = shipped_policy("stage2");
     let sysid = out.join("sysid");
-    let output = flapper(&["sysid", "--policy", &policy, "--out", sysid.to_str().unwrap()]);
+    let output = flapper(&["sysid", "--policy", &policy, "--averaged-periods", "2", "--out", sysid.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(sysid.join("sysid.json")).unwrap()).unwrap();
@@ -371,9 +371,13 @@ fn analysis_commands_reject_bad_input_with_one_line() {
         &flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]),
         "--input-lead-s",
     );
+    assert_one_line_error(
+        &flapper(&["sysid", "--policy", &policy, "--averaged-periods", "0", "--out", o]),
+        "--averaged-periods",
+    );
     assert_one_line_error(&flapper(&["phase", "--policy", &policy, "--speed-mps", "NaN", "--out", o]), "--speed-mps");
     // A perturbation the policy cannot follow is reported as such (after the progress line), not as a bad fit.
-    let output = flapper(&["sysid", "--policy", &policy, "--amplitude-m", "1", "--out", o]);
+    let output = flapper(&["sysid", "--policy", &policy, "--amplitude-m", "1", "--averaged-periods", "1", "--out", o]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success() && !stderr.contains("panicked"), "{stderr}");
     let last = stderr.trim_end().lines().last().unwrap();

@@ -209,13 +209,18 @@ fn draw_pole_zero(area: &DrawingArea<SVGBackend, Shift>, map: &PoleZeroMap) -> R
     Ok(())
 }
 
-/// One axis of a Bode plot: the model's response as a curve, the measured one as points. Each entry
-/// is (frequency in Hz, magnitude in dB, phase in degrees).
+/// One point of a Bode plot: (frequency in Hz, magnitude in dB, phase in degrees).
+pub type BodePoint = (f64, f64, f64);
+
+/// One axis of a Bode plot: the model's response as a curve, the measured one as points.
 pub struct BodeAxis {
     pub title: String,
-    pub model: Vec<(f64, f64, f64)>,
-    pub measured: Vec<(f64, f64, f64)>,
+    pub model: Vec<BodePoint>,
+    pub measured: Vec<BodePoint>,
 }
+
+/// Which coordinates of a Bode point a panel draws.
+type BodeView<'a> = &'a dyn Fn(&BodePoint) -> (f64, f64);
 
 /// Draws one row per axis, magnitude left and phase right, on a logarithmic frequency axis.
 pub fn draw_bode(path: &Path, axes: &[BodeAxis]) -> Result<(), String> {
@@ -225,8 +230,8 @@ pub fn draw_bode(path: &Path, axes: &[BodeAxis]) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| error(&e))?;
     let areas = root.split_evenly((axes.len().max(1), 2));
     for (row, axis) in axes.iter().enumerate() {
-        let magnitude = |p: &(f64, f64, f64)| (p.0, p.1);
-        let phase = |p: &(f64, f64, f64)| (p.0, p.2);
+        let magnitude = |p: &BodePoint| (p.0, p.1);
+        let phase = |p: &BodePoint| (p.0, p.2);
         draw_bode_panel(&areas[2 * row], &format!("{}: magnitude", axis.title), "magnitude (dB)", axis, &magnitude)
             .map_err(|e| error(&e))?;
         draw_bode_panel(&areas[2 * row + 1], &format!("{}: phase", axis.title), "phase (deg)", axis, &phase)
@@ -243,7 +248,7 @@ fn draw_bode_panel(
     title: &str,
     y_label: &str,
     axis: &BodeAxis,
-    pick: &dyn Fn(&(f64, f64, f64)) -> (f64, f64),
+    pick: BodeView,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let points: Vec<(f64, f64)> =
         axis.model.iter().chain(&axis.measured).map(pick).filter(|(f, v)| *f > 0.0 && v.is_finite()).collect();

@@ -68,13 +68,18 @@ pub fn tracking(
     Ok(Tracked { name: name.to_owned(), reference, results, period_s })
 }
 
-/// `flapper sysid` with its defaults.
-pub fn sysid(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, dir: &Path) -> Result<(), ReportError> {
-    use flapper_analysis::sysid::{SysidSettings, fly_records, identify, write_sysid_files};
-    let settings = SysidSettings::default();
+/// `flapper sysid` with `settings`.
+pub fn sysid(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+    settings: &flapper_analysis::sysid::SysidSettings,
+    dir: &Path,
+) -> Result<(), ReportError> {
+    use flapper_analysis::sysid::{fly_records, identify, write_sysid_files};
     let fail = |e: flapper_analysis::AnalysisError| ReportError::step("system identification", e);
-    let records = fly_records(robot, policy, task, &settings).map_err(fail)?;
-    let identified = identify(&records, &settings).map_err(fail)?;
+    let records = fly_records(robot, policy, task, settings).map_err(fail)?;
+    let identified = identify(&records, settings).map_err(fail)?;
     create(dir)?;
     write_sysid_files(dir, &identified, &records).map_err(fail)?;
     Ok(())

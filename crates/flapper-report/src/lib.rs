@@ -36,6 +36,8 @@ pub struct ReportSettings {
     /// Frame size of the video and of the snapshots (pixels, even numbers).
     pub video_size_px: (usize, usize),
     pub snapshot_size_px: (usize, usize),
+    /// The identification experiment (`flapper sysid`'s defaults).
+    pub sysid: flapper_analysis::sysid::SysidSettings,
 }
 
 impl Default for ReportSettings {
@@ -49,6 +51,7 @@ impl Default for ReportSettings {
             pictures: true,
             video_size_px: (960, 540),
             snapshot_size_px: (1280, 720),
+            sysid: flapper_analysis::sysid::SysidSettings::default(),
         }
     }
 }
@@ -127,7 +130,7 @@ pub fn generate(
         tracked.push(experiments::tracking(robot, &pilot, &task, name, settings, &out.join("tracking").join(name))?);
         progress(&format!("tracking on {name}"));
     }
-    experiments::sysid(robot, policy.clone(), &task, &out.join("sysid"))?;
+    experiments::sysid(robot, policy.clone(), &task, &settings.sysid, &out.join("sysid"))?;
     progress("system identification");
     notes.extend(experiments::phase(robot, policy.clone(), &task, &out.join("phase"))?);
     progress("phase portraits");

@@ -54,6 +54,7 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         pictures: true,
         video_size_px: (320, 180),
         snapshot_size_px: (320, 180),
+        sysid: flapper_analysis::sysid::SysidSettings { averaged_periods: 2, ..Default::default() },
     };
     let outcome = generate(&robot, &settings, &out, &|_| {}).unwrap();
     let html = std::fs::read_to_string(&outcome.index_html).unwrap();
