@@ -84,6 +84,15 @@ impl SysidSettings {
         self.period_s * (1 + self.averaged_periods) as f64
     }
 
+    /// The multisine's harmonic numbers k: the frequencies k / period_s inside `band_hz`.
+    pub fn harmonics(&self) -> Vec<usize> {
+        let [lo, hi] = self.band_hz;
+        (1..)
+            .skip_while(|&k| k as f64 * (1.0 / self.period_s) < lo - 1e-9)
+            .take_while(|&k| k as f64 * (1.0 / self.period_s) <= hi + 1e-9)
+            .collect()
+    }
+
     /// Seconds at the start of each record left out of the fit and the validation: the first period.
     pub fn skip_s(&self) -> f64 {
         self.period_s
@@ -113,10 +122,7 @@ pub fn smooth(signal: &[f64]) -> Vec<f64> {
 /// `band_hz`, each with a random phase drawn from (`seed`, `axis`), RMS 1 once faded in over
 /// `fade_in_s`.
 pub fn multisine(seed: u64, axis: usize, steps: usize, dt_s: f64, s: &SysidSettings) -> Vec<f64> {
-    let [lo, hi] = s.band_hz;
-    let base_hz = 1.0 / s.period_s;
-    let harmonics: Vec<f64> =
-        (1..).map(|k| k as f64 * base_hz).skip_while(|f| *f < lo - 1e-9).take_while(|f| *f <= hi + 1e-9).collect();
+    let harmonics: Vec<f64> = s.harmonics().into_iter().map(|k| k as f64 * (1.0 / s.period_s)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(axis as u64);
     let sines: Vec<(f64, f64)> = harmonics.iter().map(|&f| (f, rng.random_range(0.0..std::f64::consts::TAU))).collect();
@@ -427,11 +433,7 @@ pub fn measured_response(
 ) -> Vec<(f64, num_complex::Complex64)> {
     use num_complex::Complex64;
     let period = (s.period_s / CONTROL_PERIOD_S).round() as usize;
-    let base_hz = 1.0 / s.period_s;
-    let harmonics: Vec<usize> = (1..)
-        .take_while(|&k| k as f64 * base_hz <= s.band_hz[1] + 1e-9)
-        .filter(|&k| k as f64 * base_hz >= s.band_hz[0] - 1e-9)
-        .collect();
+    let skip = (s.skip_s() / CONTROL_PERIOD_S).round() as usize;
     let mine: Vec<Record> = records.iter().filter(|r| r.axis == axis).map(|r| r.record(lead)).collect();
     let coefficient = |signal: &[f64], k: usize| -> Complex64 {
         signal
@@ -440,16 +442,15 @@ pub fn measured_response(
             .map(|(n, v)| v * Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * n) as f64 / period as f64))
             .sum()
     };
-    harmonics
-        .iter()
-        .map(|&k| {
-            let skip = (s.skip_s() / CONTROL_PERIOD_S).round() as usize;
+    s.harmonics()
+        .into_iter()
+        .map(|k| {
             let ratios: Vec<Complex64> = mine
                 .iter()
                 .filter(|r| r.input.len() >= skip + period)
                 .map(|r| coefficient(&r.output[skip..skip + period], k) / coefficient(&r.input[skip..skip + period], k))
                 .collect();
-            (k as f64 * base_hz, ratios.iter().sum::<Complex64>() / ratios.len().max(1) as f64)
+            (k as f64 * (1.0 / s.period_s), ratios.iter().sum::<Complex64>() / ratios.len().max(1) as f64)
         })
         .collect()
 }
