@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flapper_eval::spectrum::fundamental;
-use flapper_eval::tracking::{Pilot, TrackingStep, energy_per_metre_j, evaluate_tracking};
+use flapper_eval::tracking::{TrackingController, TrackingStep, energy_per_metre_j, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
@@ -75,7 +75,7 @@ pub fn flight_modes(
     let dt_s = exact.control_period_s(robot.timestep_s());
     let lookahead_s = exact.observation.lookahead_steps as f64 * dt_s;
     let reference = Arc::new(named("longitudinal", NAMED_START_M, dt_s, lookahead_s).expect("a named reference"));
-    let flight = evaluate_tracking(robot, &Pilot::Policy(policy), &exact, reference, 1, 1)?.remove(0);
+    let flight = evaluate_tracking(robot, &TrackingController::Policy(policy), &exact, reference, 1, 1)?.remove(0);
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);
         return Err(AnalysisError::FlightFailed {

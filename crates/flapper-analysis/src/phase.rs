@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
@@ -47,7 +47,7 @@ pub fn fly_command(
         duration_s: seconds + lookahead_s,
     };
     let reference = Arc::new(build("phase", &[piece], NAMED_START_M, 0.0, dt_s));
-    Ok(evaluate_tracking(robot, &Pilot::Policy(policy.clone()), &exact, reference, 1, 1)?.remove(0))
+    Ok(evaluate_tracking(robot, &TrackingController::Policy(policy.clone()), &exact, reference, 1, 1)?.remove(0))
 }
 
 /// One joint's motion after the launch: angle (rad) and angular velocity (rad/s) every 20 ms.

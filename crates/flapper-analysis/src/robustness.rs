@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking, evaluate_tracking_randomized};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_sim::{RobotModel, Vec3};
 use flapper_task::TaskConfig;
@@ -343,12 +343,12 @@ fn level_reference(speed_mps: f64, dt_s: f64, lookahead_s: f64) -> Reference {
     build(&format!("level at {speed_mps} m/s"), &pieces, Vec3::new(0.0, 0.0, 10.0), 0.0, dt_s)
 }
 
-/// Runs the sweeps of `settings` with `pilot` on `reference`; `progress` is called after each
+/// Runs the sweeps of `settings` with `controller` on `reference`; `progress` is called after each
 /// setting with its description. Returns the report and, per wind of `report.wind`, its first
 /// episodes for the path plots. Writes nothing (see [`write_robustness`]).
 pub fn robustness(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     reference: Arc<Reference>,
     settings: &RobustnessSettings,
@@ -357,7 +357,7 @@ pub fn robustness(
     let began = std::time::Instant::now();
     let (episodes, seed) = (settings.episodes, settings.seed);
     let fly = |randomization: &RandomizationConfig| {
-        evaluate_tracking_randomized(robot, pilot, task, randomization, reference.clone(), episodes, seed)
+        evaluate_tracking_randomized(robot, controller, task, randomization, reference.clone(), episodes, seed)
     };
     let mut report = RobustnessReport {
         reference: reference.name().to_owned(),
@@ -422,7 +422,7 @@ pub fn robustness(
                     let level = Arc::new(level_reference(speed, reference.dt_s(), lookahead_s));
                     let tally = Tally::of(&evaluate_tracking(
                         robot,
-                        pilot,
+                        controller,
                         task,
                         level,
                         episodes.min(ENVELOPE_EPISODES),

@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flapper_eval::tracking::{Pilot, evaluate_tracking};
+use flapper_eval::tracking::{TrackingController, evaluate_tracking};
 use flapper_plot::{BodeAxis, COLORS, Curve, Panel, PoleZeroMap};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{RobotModel, Vec3};
@@ -222,7 +222,7 @@ pub fn fly_records(
         .enumerate()
         .map(|(record, (set, axis, seed))| (record, set, axis, seed))
         .collect();
-    let pilot = Pilot::Policy(policy);
+    let controller = TrackingController::Policy(policy);
     plan.par_iter()
         .map(|&(record, set, axis, seed)| {
             let total = steps + lookahead + 2;
@@ -237,7 +237,7 @@ pub fn fly_records(
                 })
                 .collect();
             let reference = Arc::new(Reference::new("sysid", CONTROL_PERIOD_S, points));
-            let flown = evaluate_tracking(robot, &pilot, &exact, reference, 1, seed)?.remove(0);
+            let flown = evaluate_tracking(robot, &controller, &exact, reference, 1, seed)?.remove(0);
             let last_s = flown.steps.last().map_or(0.0, |st| st.time_s);
             if !flown.completed() {
                 return Err(AnalysisError::RecordFailed {

@@ -8,7 +8,7 @@ use flapper_analysis::robustness::{
     nominal_randomization, robustness, table_iii_randomization, wind_randomization,
 };
 use flapper_eval::load_flight_policy;
-use flapper_eval::tracking::{Pilot, evaluate_tracking, evaluate_tracking_randomized};
+use flapper_eval::tracking::{TrackingController, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_sim::{LIFTING_SURFACE_GEOMS, RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::randomization::randomize;
@@ -23,12 +23,12 @@ fn assert_same(a: &Tally, b: &Tally, what: &str) {
 }
 
 /// The shipped stage-3 policy and the sharp-turn reference: small runs of the sweeps.
-fn stage3_on_sharp_turn() -> (RobotModel, Pilot, TaskConfig, Arc<Reference>) {
+fn stage3_on_sharp_turn() -> (RobotModel, TrackingController, TaskConfig, Arc<Reference>) {
     let robot = RobotModel::flapper().unwrap();
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
     let (policy, task) = load_flight_policy(&path).unwrap();
     let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
-    (robot, Pilot::Policy(Arc::new(policy)), task, reference)
+    (robot, TrackingController::Policy(Arc::new(policy)), task, reference)
 }
 
 #[test]
@@ -77,7 +77,7 @@ fn a_kutta_lift_setting_changes_only_kutta_lift_in_mujoco_and_the_next_draw_rest
 
 #[test]
 fn the_sweep_counts_the_evaluation_s_completed_episodes() {
-    let (robot, pilot, task, reference) = stage3_on_sharp_turn();
+    let (robot, controller, task, reference) = stage3_on_sharp_turn();
     let settings = RobustnessSettings {
         sweeps: vec![Sweep::Fluid, Sweep::Wind],
         episodes: 6,
@@ -87,7 +87,7 @@ fn the_sweep_counts_the_evaluation_s_completed_episodes() {
     };
     assert_eq!(settings.settings_count(), 6 * 2 + 2);
     let calls = std::sync::atomic::AtomicUsize::new(0);
-    let (report, paths) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {
+    let (report, paths) = robustness(&robot, &controller, &task, reference.clone(), &settings, &|_| {
         calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     })
     .unwrap();
@@ -97,7 +97,7 @@ fn the_sweep_counts_the_evaluation_s_completed_episodes() {
     assert_eq!(paths.len(), 2);
 
     // Range 0 with nothing drawn is the plain evaluation: same starts, same outcomes.
-    let plain = Tally::of(&evaluate_tracking(&robot, &pilot, &task, reference.clone(), 6, 3).unwrap());
+    let plain = Tally::of(&evaluate_tracking(&robot, &controller, &task, reference.clone(), 6, 3).unwrap());
     for row in report.fluid.iter().filter(|f| f.range == 0.0) {
         assert_same(&row.tally, &plain, &format!("{} at r = 0", row.coefficient));
     }
@@ -107,7 +107,7 @@ fn the_sweep_counts_the_evaluation_s_completed_episodes() {
         let series = FluidSeries::ALL.into_iter().find(|s| s.name() == row.coefficient).unwrap();
         let results = evaluate_tracking_randomized(
             &robot,
-            &pilot,
+            &controller,
             &task,
             &fluid_randomization(series, 0.5),
             reference.clone(),
@@ -170,7 +170,7 @@ fn a_tailwind_asks_for_less_airspeed_and_the_envelope_says_whether_the_robot_has
 
 #[test]
 fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() {
-    let (robot, pilot, task, reference) = stage3_on_sharp_turn();
+    let (robot, controller, task, reference) = stage3_on_sharp_turn();
     let settings = RobustnessSettings {
         sweeps: vec![Sweep::TableIii, Sweep::Envelope],
         episodes: 6,
@@ -178,14 +178,14 @@ fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() 
         ranges: vec![],
         winds: vec![],
     };
-    let (report, _) = robustness(&robot, &pilot, &task, reference.clone(), &settings, &|_| {}).unwrap();
+    let (report, _) = robustness(&robot, &controller, &task, reference.clone(), &settings, &|_| {}).unwrap();
     let envelope = report.envelope.as_ref().unwrap();
     assert!(envelope.slowest_sustained_mps.is_some(), "the stage-3 policy sustains some level airspeed");
     let inside = report.table_iii_inside_envelope.expect("both sweeps ran");
 
     // The same episodes flown again: each recorded the wind it drew from Table III's box.
     let results =
-        evaluate_tracking_randomized(&robot, &pilot, &task, &table_iii_randomization(), reference.clone(), 6, 2)
+        evaluate_tracking_randomized(&robot, &controller, &task, &table_iii_randomization(), reference.clone(), 6, 2)
             .unwrap();
     assert_same(&Tally::of(&results), report.table_iii.as_ref().unwrap(), "Table III");
     for r in &results {
@@ -199,5 +199,5 @@ fn table_iii_is_also_counted_over_the_episodes_whose_wind_the_envelope_allows() 
     assert_eq!(inside.episodes, allowed.len());
     assert_eq!(inside.successes, allowed.iter().filter(|r| r.completed()).count());
     // Unrandomized episodes fly in still air.
-    assert!(evaluate_tracking(&robot, &pilot, &task, reference, 1, 2).unwrap()[0].wind_mps == Vec3::ZERO);
+    assert!(evaluate_tracking(&robot, &controller, &task, reference, 1, 2).unwrap()[0].wind_mps == Vec3::ZERO);
 }

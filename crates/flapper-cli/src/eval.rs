@@ -1,5 +1,5 @@
 //! `flapper eval`: fly a policy and the scripted baseline on one reference, print the table side by
-//! side, write CSV and plots per pilot and a summary CSV.
+//! side, write CSV and plots per controller and a summary CSV.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -7,7 +7,7 @@ use std::sync::Arc;
 use anyhow::{Context, Result, bail};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
-use flapper_eval::tracking::{Pilot, evaluate_tracking};
+use flapper_eval::tracking::{TrackingController, evaluate_tracking};
 use flapper_eval::tracking_report::{
     TrackingSummary, write_observations_csv, write_steps_csv, write_summary_csv, write_tracking_plots,
 };
@@ -23,7 +23,7 @@ pub struct EvalRequest<'a> {
     pub out: &'a Path,
     /// Fly the scripted gait too.
     pub baseline: bool,
-    /// Write episode 0's observations and actions per pilot.
+    /// Write episode 0's observations and actions per controller.
     pub observations: bool,
 }
 
@@ -35,17 +35,21 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     if policy_path.is_none() && !baseline {
         bail!("nothing to fly: give --policy, or drop --no-baseline");
     }
-    let mut pilots: Vec<(&str, Pilot, TaskConfig)> = Vec::new();
+    let mut controllers: Vec<(&str, TrackingController, TaskConfig)> = Vec::new();
     if let Some(path) = policy_path {
         let (policy, task) = load_flight_policy(path)?;
-        pilots.push(("policy", Pilot::Policy(Arc::new(policy)), task));
+        controllers.push(("policy", TrackingController::Policy(Arc::new(policy)), task));
     }
     if baseline {
-        pilots.push(("scripted", Pilot::Scripted(ScriptedGaitConfig::default()), TaskConfig::default()));
+        controllers.push((
+            "scripted",
+            TrackingController::Scripted(ScriptedGaitConfig::default()),
+            TaskConfig::default(),
+        ));
     }
-    let lookahead = pilots[0].2.observation.lookahead_steps;
-    // Every pilot's task steps at the same rate: the control substeps are the paper's for both.
-    let dt_s = pilots[0].2.control_period_s(robot.timestep_s());
+    let lookahead = controllers[0].2.observation.lookahead_steps;
+    // Every controller's task steps at the same rate: the control substeps are the paper's for both.
+    let dt_s = controllers[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
     if let Some(warning) = flapper_eval::tracking::speed_warning(&reference) {
         eprintln!("warning: {warning}");
@@ -58,9 +62,9 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         episodes
     );
     let mut summaries = Vec::new();
-    for (name, pilot, task) in &pilots {
+    for (name, controller, task) in &controllers {
         let began = std::time::Instant::now();
-        let results = evaluate_tracking(robot, pilot, task, reference.clone(), episodes, seed)?;
+        let results = evaluate_tracking(robot, controller, task, reference.clone(), episodes, seed)?;
         let period = task.control_period_s(robot.timestep_s());
         let summary =
             TrackingSummary::of(&results, period, flapper_task::reference::named::manoeuvre_window_s(reference.name()));
@@ -68,7 +72,8 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;
         if observations {
-            let (_, record) = flapper_eval::tracking::record_episode(robot, pilot, task, reference.clone(), seed, 0)?;
+            let (_, record) =
+                flapper_eval::tracking::record_episode(robot, controller, task, reference.clone(), seed, 0)?;
             let names = flapper_task::observation::ObservationLayout::of(&task.observation).names();
             write_observations_csv(&record, &names, &dir.join("observations.csv"))?;
         }
@@ -97,7 +102,7 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     }
     let summary_path = out.join("summary.csv");
     write_summary_csv(&summaries, &summary_path)?;
-    println!("wrote {} and per-pilot folders in {}", summary_path.display(), out.display());
+    println!("wrote {} and per-controller folders in {}", summary_path.display(), out.display());
     Ok(())
 }
 
@@ -125,7 +130,7 @@ pub struct EvalArgs {
     /// Fly only the scripted baseline (no policy).
     #[arg(long, conflicts_with_all = ["policy", "no_baseline"])]
     pub baseline_only: bool,
-    /// Also write what each pilot saw and did in episode 0 (observations and actions, one row
+    /// Also write what each controller saw and did in episode 0 (observations and actions, one row
     /// per control step) as PILOT/observations.csv: for checking another implementation.
     #[arg(long)]
     pub observations: bool,

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use anyhow::{Result, bail};
 use flapper_analysis::robustness::{MAX_RANGE, PAPER_RANGES, RobustnessSettings, Sweep, robustness, write_robustness};
 use flapper_eval::load_flight_policy;
-use flapper_eval::tracking::Pilot;
+use flapper_eval::tracking::TrackingController;
 use flapper_sim::RobotModel;
 
 /// What `flapper robustness` runs, borrowed from [`RobustnessArgs`].
@@ -84,9 +84,9 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result
         settings.sweeps.iter().map(|s| s.name()).collect::<Vec<_>>().join(", ")
     );
     let progress = crate::progress::Progress::new(settings.settings_count(), "settings");
-    let pilot = Pilot::Policy(Arc::new(policy));
+    let controller = TrackingController::Policy(Arc::new(policy));
     let (report, wind_paths) =
-        robustness(robot, &pilot, &task, reference.clone(), &settings, &|done: &str| progress.step_done(done))?;
+        robustness(robot, &controller, &task, reference.clone(), &settings, &|done: &str| progress.step_done(done))?;
     progress.finish();
 
     if !report.fluid.is_empty() {

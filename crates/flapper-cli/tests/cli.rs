@@ -229,7 +229,7 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     ] {
         assert!(eval_out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
     }
-    // summary.csv is the printed table: a row per metric (labels with commas stay one field), a column per pilot.
+    // summary.csv is the printed table: a row per metric (labels with commas stay one field), a column per controller.
     let mut summary = csv::Reader::from_path(eval_out.join("summary.csv")).unwrap();
     assert_eq!(summary.headers().unwrap().iter().collect::<Vec<_>>(), ["metric", "policy", "scripted"]);
     let rows: Vec<csv::StringRecord> = summary.records().map(|r| r.unwrap()).collect();

@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking};
 use flapper_eval::{PolicyFileError, load_flight_policy};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::TaskConfig;
@@ -72,10 +72,10 @@ impl ValidationSet {
     /// Flies every reference from `episodes` randomized starts with the policy in `policy_path`.
     pub fn judge(&self, robot: &RobotModel, policy_path: &Path) -> Result<Score, ValidationError> {
         let (policy, task) = load_flight_policy(policy_path)?;
-        let pilot = Pilot::Policy(Arc::new(policy));
+        let controller = TrackingController::Policy(Arc::new(policy));
         let mut per_reference = Vec::new();
         for reference in &self.references {
-            let results = evaluate_tracking(robot, &pilot, &task, reference.clone(), self.episodes, self.seed)?;
+            let results = evaluate_tracking(robot, &controller, &task, reference.clone(), self.episodes, self.seed)?;
             per_reference.push(ReferenceScore::of(reference.name(), &results));
         }
         Ok(Score::of(per_reference))

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use flapper_eval::load_flight_policy;
-use flapper_eval::tracking::{Pilot, record_episode};
+use flapper_eval::tracking::{TrackingController, record_episode};
 use flapper_ppo::InferenceScratch;
 use flapper_sim::{RobotModel, Vec3};
 use flapper_task::reference::named::named;
@@ -35,14 +35,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = RobotModel::flapper()?;
     let (policy, task) = load_flight_policy(&PathBuf::from(policy_path))?;
     let policy = Arc::new(policy);
-    let pilot = Pilot::Policy(policy.clone());
+    let controller = TrackingController::Policy(policy.clone());
     let period_s = task.control_period_s(robot.timestep_s());
     let lookahead_s = task.observation.lookahead_steps as f64 * period_s;
     let mut observations: Vec<Vec<f32>> = Vec::new();
     for (name, episode) in FLIGHTS {
         let reference = named(name, Vec3::new(0.0, 0.0, 10.0), period_s, lookahead_s)
             .ok_or_else(|| format!("no named reference {name}"))?;
-        let (_, record) = record_episode(&robot, &pilot, &task, Arc::new(reference), 1, episode)?;
+        let (_, record) = record_episode(&robot, &controller, &task, Arc::new(reference), 1, episode)?;
         observations.extend(record.observations.into_iter().step_by(KEEP_EVERY));
     }
     let flown = observations.len();

@@ -1,4 +1,4 @@
-//! Trajectory-tracking evaluation (paper IV-B, IV-C): a pilot (a learned policy, or the scripted gait
+//! Trajectory-tracking evaluation (paper IV-B, IV-C): a controller (a learned policy, or the scripted gait
 //! for comparison) flies a fixed reference from randomized starts, episode after episode, and each
 //! flight is measured: completion, position error, airspeed, power, energy per metre, and the
 //! flapping frequency of flap, wing pitch and tail.
@@ -18,9 +18,11 @@ use crate::controller::{Controller, FlightState};
 use crate::scripted::{ScriptedGait, ScriptedGaitConfig};
 use crate::spectrum::{Fundamental, fundamental};
 
-/// Who flies.
+/// Who flies a tracking evaluation: a trained policy, or the scripted gait (the one [`Controller`] that
+/// follows a reference). One name for the concept: a controller decides the joint targets; this enum
+/// says which one flies the task environment.
 #[derive(Debug, Clone)]
-pub enum Pilot {
+pub enum TrackingController {
     /// A trained policy's mean action, normalizer frozen.
     Policy(Arc<ActorCritic>),
     /// The scripted gait, its altitude target following the reference.
@@ -153,17 +155,17 @@ pub fn evaluation_task(task: &TaskConfig, reference: &Reference) -> TaskConfig {
     config
 }
 
-/// Flies `episodes` episodes of `reference` with `pilot`. Episode k starts from the randomized initial
+/// Flies `episodes` episodes of `reference` with `controller`. Episode k starts from the randomized initial
 /// state that environment k of a run seeded `seed` draws (position, speed, attitude offsets).
 pub fn evaluate_tracking(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     reference: Arc<Reference>,
     episodes: usize,
     seed: u64,
 ) -> Result<Vec<EpisodeResult>, ModelError> {
-    fly_episodes(robot, pilot, evaluation_task(task, &reference), reference, episodes, seed)
+    fly_episodes(robot, controller, evaluation_task(task, &reference), reference, episodes, seed)
 }
 
 /// As [`evaluate_tracking`], with the robot's dynamics and the wind drawn per episode from
@@ -171,7 +173,7 @@ pub fn evaluate_tracking(
 /// environment k's random stream, so its start differs from the unrandomized episode k's.
 pub fn evaluate_tracking_randomized(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     randomization: &RandomizationConfig,
     reference: Arc<Reference>,
@@ -180,12 +182,12 @@ pub fn evaluate_tracking_randomized(
 ) -> Result<Vec<EpisodeResult>, ModelError> {
     let mut config = evaluation_task(task, &reference);
     config.randomization = randomization.clone();
-    fly_episodes(robot, pilot, config, reference, episodes, seed)
+    fly_episodes(robot, controller, config, reference, episodes, seed)
 }
 
 fn fly_episodes(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     config: TaskConfig,
     reference: Arc<Reference>,
     episodes: usize,
@@ -196,14 +198,14 @@ fn fly_episodes(
         .into_par_iter()
         .map(|k| {
             let env = FlightEnv::new(robot, config.clone(), ReferenceSource::Fixed(reference.clone()), seed, k)?;
-            Ok(fly_episode(env, pilot, k, None))
+            Ok(fly_episode(env, controller, k, None))
         })
         .collect()
 }
 
-/// What the pilot saw and did at each control step of one episode: the observation (normalized
+/// What the controller saw and did at each control step of one episode: the observation (normalized
 /// by nothing: the environment's raw numbers, in `ObservationLayout::names()` order) and the action
-/// as the pilot gave it (order q1..q5; the environment clips it to [-1, 1]), for checking another
+/// as the controller gave it (order q1..q5; the environment clips it to [-1, 1]), for checking another
 /// implementation against flapper.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EpisodeTrace {
@@ -215,7 +217,7 @@ pub struct EpisodeTrace {
 /// with its observations and actions.
 pub fn record_episode(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     reference: Arc<Reference>,
     seed: u64,
@@ -224,29 +226,29 @@ pub fn record_episode(
     let config = Arc::new(evaluation_task(task, &reference));
     let env = FlightEnv::new(robot, config, ReferenceSource::Fixed(reference), seed, episode)?;
     let mut record = EpisodeTrace::default();
-    let result = fly_episode(env, pilot, episode, Some(&mut record));
+    let result = fly_episode(env, controller, episode, Some(&mut record));
     Ok((result, record))
 }
 
-/// A pilot's state within one episode.
-enum PilotState<'a> {
+/// A controller's state within one episode.
+enum ControllerState<'a> {
     Policy { policy: &'a ActorCritic, observation: Vec<f32>, scratch: InferenceScratch },
     Scripted { gait: ScriptedGait, action_map: ActionMap },
 }
 
 fn fly_episode(
     mut env: FlightEnv,
-    pilot: &Pilot,
+    controller: &TrackingController,
     episode: usize,
     mut record: Option<&mut EpisodeTrace>,
 ) -> EpisodeResult {
-    let mut flying = match pilot {
-        Pilot::Policy(policy) => PilotState::Policy {
+    let mut state = match controller {
+        TrackingController::Policy(policy) => ControllerState::Policy {
             policy,
             observation: vec![0.0f32; env.observation_layout().size()],
             scratch: InferenceScratch::default(),
         },
-        Pilot::Scripted(config) => PilotState::Scripted {
+        TrackingController::Scripted(config) => ControllerState::Scripted {
             gait: ScriptedGait::new(*config),
             action_map: ActionMap::new(env.control().sim(), env.config().control.action_scale),
         },
@@ -254,21 +256,21 @@ fn fly_episode(
     let mut action = Vec::new();
     let mut steps = Vec::with_capacity(env.reference().len());
     loop {
-        match &mut flying {
-            PilotState::Policy { policy, observation, scratch } => {
+        match &mut state {
+            ControllerState::Policy { policy, observation, scratch } => {
                 env.observe(observation);
                 policy.act_deterministic(observation, scratch, &mut action);
             }
-            PilotState::Scripted { gait, action_map } => {
+            ControllerState::Scripted { gait, action_map } => {
                 gait.set_altitude_target(env.reference().target(env.step_count()).z);
                 let targets = gait.joint_targets(&FlightState::read(env.control().sim()));
                 action = action_map.to_action(&targets).to_vec();
             }
         }
         if let Some(record) = record.as_deref_mut() {
-            let observation = match &flying {
-                PilotState::Policy { observation, .. } => observation.clone(),
-                PilotState::Scripted { .. } => {
+            let observation = match &state {
+                ControllerState::Policy { observation, .. } => observation.clone(),
+                ControllerState::Scripted { .. } => {
                     let mut observation = vec![0.0f32; env.observation_layout().size()];
                     env.observe(&mut observation);
                     observation

@@ -18,7 +18,7 @@ use crate::tracking::{EpisodeResult, EpisodeTrace, TrackingStep};
 pub const ANALYSED_JOINTS: [ActuatedJoint; 3] =
     [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
 
-/// Figures over all episodes of one pilot on one reference.
+/// Figures over all episodes of one controller on one reference.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct TrackingSummary {
     pub episodes: usize,
@@ -359,7 +359,7 @@ pub fn write_tracking_plots(
     Ok(vec![path_3d, path_views, error, joints, attitude])
 }
 
-/// `summary.csv`: the printed table, a row per metric and a column per pilot (`metric,NAME,...`).
+/// `summary.csv`: the printed table, a row per metric and a column per controller (`metric,NAME,...`).
 pub fn write_summary_csv(summaries: &[(&str, TrackingSummary)], path: &Path) -> Result<(), OutputError> {
     let error = |e: &dyn std::fmt::Display| OutputError::Write { path: path.to_owned(), message: e.to_string() };
     let tables: Vec<Vec<(String, String)>> = summaries.iter().map(|(_, s)| s.rows()).collect();
@@ -374,7 +374,7 @@ pub fn write_summary_csv(summaries: &[(&str, TrackingSummary)], path: &Path) -> 
     flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
 }
 
-/// A row of `observations.csv`: the step, what the pilot observed (named by the observation layout)
+/// A row of `observations.csv`: the step, what the controller observed (named by the observation layout)
 /// and the actions it chose.
 #[derive(serde::Serialize)]
 struct ObservationRow<'a> {

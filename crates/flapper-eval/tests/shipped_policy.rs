@@ -9,19 +9,22 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use flapper_eval::load_flight_policy;
-use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking};
 use flapper_sim::{RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::reference::named::named;
 
 /// The shipped policy of `stage`, its task, and the named `reference` with the policy's lookahead.
-fn shipped(stage: &str, reference: &str) -> (RobotModel, Pilot, TaskConfig, Arc<flapper_task::reference::Reference>) {
+fn shipped(
+    stage: &str,
+    reference: &str,
+) -> (RobotModel, TrackingController, TaskConfig, Arc<flapper_task::reference::Reference>) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies").join(stage).join("policy.safetensors");
     let robot = RobotModel::flapper().unwrap();
     let (policy, task) = load_flight_policy(&path).unwrap();
     let lookahead_s = task.observation.lookahead_steps as f64 * 0.02;
     let reference = Arc::new(named(reference, Vec3::new(0.0, 0.0, 10.0), 0.02, lookahead_s).unwrap());
-    (robot, Pilot::Policy(Arc::new(policy)), task, reference)
+    (robot, TrackingController::Policy(Arc::new(policy)), task, reference)
 }
 
 /// Flies `reference` from `starts` randomized starts (seed 7): at least `min_completed` complete, each
@@ -33,8 +36,8 @@ fn check_tracks(
     min_completed: usize,
     max_rms_m: f64,
 ) -> Vec<EpisodeResult> {
-    let (robot, pilot, task, path) = shipped(stage, reference);
-    let results = evaluate_tracking(&robot, &pilot, &task, path, starts, 7).unwrap();
+    let (robot, controller, task, path) = shipped(stage, reference);
+    let results = evaluate_tracking(&robot, &controller, &task, path, starts, 7).unwrap();
     let completed: Vec<_> = results.iter().filter(|r| r.completed()).collect();
     assert!(
         completed.len() >= min_completed,
@@ -58,12 +61,12 @@ fn check_flies_the_aerobatic_chain(stage: &str) {
 }
 
 fn check_flies_the_cruise(stage: &str) {
-    let (robot, pilot, task, reference) = shipped(stage, "cruise");
+    let (robot, controller, task, reference) = shipped(stage, "cruise");
     let mut nominal = task.clone();
     nominal.initial_state.position_offset_m = [0.0; 3];
     nominal.initial_state.speed_offset_mps = 0.0;
     nominal.initial_state.attitude_offset_deg = 0.0;
-    let exact = &evaluate_tracking(&robot, &pilot, &nominal, reference, 1, 1).unwrap()[0];
+    let exact = &evaluate_tracking(&robot, &controller, &nominal, reference, 1, 1).unwrap()[0];
     assert!(exact.completed(), "{stage}: nominal start ended {:?} after {} steps", exact.end, exact.steps.len());
     assert!(exact.rms_error_m() < 0.3, "{stage}: nominal start RMS error {:.2} m", exact.rms_error_m());
     check_tracks(stage, "cruise", 10, 7, 0.5);

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use flapper_analysis::robustness::{
     PAPER_RANGES, RobustnessSettings, Sweep, default_winds, robustness as run_sweeps, write_robustness,
 };
-use flapper_eval::tracking::{EpisodeResult, Pilot, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking};
 use flapper_eval::tracking_report::{TrackingSummary, write_tracking_plots};
 use flapper_ppo::ActorCritic;
 use flapper_sim::RobotModel;
@@ -43,14 +43,14 @@ fn resolve_reference(robot: &RobotModel, task: &TaskConfig, name: &str) -> Resul
 /// `flapper eval` without the baseline: `summary.json` (the table's figures), plots of 3 episodes.
 pub fn tracking(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     name: &str,
     settings: &ReportSettings,
     dir: &Path,
 ) -> Result<Tracked, ReportError> {
     let (reference, period_s) = resolve_reference(robot, task, name)?;
-    let results = evaluate_tracking(robot, pilot, task, reference.clone(), settings.episodes, settings.seed)
+    let results = evaluate_tracking(robot, controller, task, reference.clone(), settings.episodes, settings.seed)
         .map_err(|e| ReportError::step(format!("tracking on {name}"), e))?;
     let summary = TrackingSummary::of(&results, period_s, flapper_task::reference::named::manoeuvre_window_s(name));
     create(dir)?;
@@ -121,7 +121,7 @@ pub fn modes(robot: &RobotModel, policy: Arc<ActorCritic>, task: &TaskConfig, di
 /// at once and, with `envelope`, the level airspeed envelope.
 pub fn robustness(
     robot: &RobotModel,
-    pilot: &Pilot,
+    controller: &TrackingController,
     task: &TaskConfig,
     name: &str,
     envelope: bool,
@@ -142,7 +142,7 @@ pub fn robustness(
     };
     let fail = |e: flapper_analysis::AnalysisError| ReportError::step(format!("robustness on {name}"), e);
     let (report, wind_paths) =
-        run_sweeps(robot, pilot, task, reference.clone(), &sweep_settings, &|_: &str| {}).map_err(fail)?;
+        run_sweeps(robot, controller, task, reference.clone(), &sweep_settings, &|_: &str| {}).map_err(fail)?;
     create(dir)?;
     write_robustness(&report, &wind_paths, &reference, dir).map_err(fail)?;
     Ok(())

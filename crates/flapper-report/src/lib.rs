@@ -13,7 +13,7 @@ mod tables;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flapper_eval::tracking::Pilot;
+use flapper_eval::tracking::TrackingController;
 use flapper_sim::RobotModel;
 
 pub use experiments::TRACKED_REFERENCES;
@@ -122,12 +122,19 @@ pub fn generate(
                 .map_err(|e| ReportError::Write { path: dir.clone(), message: e.to_string() })?;
         }
     }
-    let pilot = Pilot::Policy(policy.clone());
+    let controller = TrackingController::Policy(policy.clone());
     let mut notes = Vec::new();
 
     let mut tracked = Vec::new();
     for name in TRACKED_REFERENCES {
-        tracked.push(experiments::tracking(robot, &pilot, &task, name, settings, &out.join("tracking").join(name))?);
+        tracked.push(experiments::tracking(
+            robot,
+            &controller,
+            &task,
+            name,
+            settings,
+            &out.join("tracking").join(name),
+        )?);
         progress(&format!("tracking on {name}"));
     }
     experiments::sysid(robot, policy.clone(), &task, &settings.sysid, &out.join("sysid"))?;
@@ -137,7 +144,15 @@ pub fn generate(
     experiments::modes(robot, policy.clone(), &task, &out.join("modes"))?;
     progress("flight modes");
     for (name, envelope) in [("longitudinal", true), ("lateral", false)] {
-        experiments::robustness(robot, &pilot, &task, name, envelope, settings, &out.join("robustness").join(name))?;
+        experiments::robustness(
+            robot,
+            &controller,
+            &task,
+            name,
+            envelope,
+            settings,
+            &out.join("robustness").join(name),
+        )?;
         progress(&format!("robustness on {name}"));
     }
     let find = |name: &str| tracked.iter().find(|t| t.name == name).expect("every tracked reference is flown");
@@ -209,7 +224,7 @@ pub fn render_flight(
     let settings = ReportSettings { policy: policy.to_owned(), episodes: 1, seed, ..ReportSettings::default() };
     let tracked = experiments::tracking(
         robot,
-        &Pilot::Policy(Arc::new(actor)),
+        &TrackingController::Policy(Arc::new(actor)),
         &task,
         reference,
         &settings,
