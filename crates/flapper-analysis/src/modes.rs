@@ -15,7 +15,7 @@ use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
 use flapper_task::reference::NAMED_START_M;
 use flapper_task::reference::named::named;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::AnalysisError;
 
@@ -34,27 +34,36 @@ pub const GLIDING_SEGMENT_FRACTION: f64 = 0.5;
 /// The launch transient left out of the first segment (s).
 const SETTLE_S: f64 = 2.0;
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SegmentFigures {
-    pub segment: &'static str,
+    pub segment: String,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub start_s: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub end_s: f64,
     /// Half the peak-to-peak angle of flap_left (deg).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub flap_amplitude_deg: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub flap_fundamental_hz: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub flap_energy_fraction: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_power_w: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_absolute_power_w: f64,
     /// Absolute mechanical energy over the distance flown in the segment (J/m).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub energy_per_metre_j: f64,
     /// Share of the segment's time spent gliding ([`held_wings`]).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub glide_fraction: f64,
     /// `glide_fraction` at least [`GLIDING_SEGMENT_FRACTION`].
     pub glides: bool,
 }
 
 /// `modes.json`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ModesReport {
     pub segments: Vec<SegmentFigures>,
     pub verdict: String,
@@ -91,7 +100,7 @@ pub fn flight_modes(
         .iter()
         .map(|&(segment, start_s, end_s)| segment_figures(&flight.steps, &held, dt_s, segment, start_s, end_s))
         .collect();
-    let gliding: Vec<&str> = segments.iter().filter(|s| s.glides).map(|s| s.segment).collect();
+    let gliding: Vec<&str> = segments.iter().filter(|s| s.glides).map(|s| s.segment.as_str()).collect();
     let verdict = if gliding.is_empty() {
         format!(
             "no: the wings are held {:.0}% of the glide segment and {:.0}% of the dive (a segment glides from {:.0}%)",
@@ -210,7 +219,7 @@ fn segment_figures(
     let mean = |f: &dyn Fn(&TrackingStep) -> f64| inside.iter().map(|s| f(s)).sum::<f64>() / n;
     let glide_fraction = indices.iter().filter(|&&k| held[k]).count() as f64 / n;
     SegmentFigures {
-        segment,
+        segment: segment.to_owned(),
         start_s,
         end_s,
         flap_amplitude_deg: (0.5 * peak_to_peak(&angles)).to_degrees(),

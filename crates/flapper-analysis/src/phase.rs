@@ -13,7 +13,7 @@ use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
 use flapper_task::reference::NAMED_START_M;
 use flapper_task::reference::generator::{Piece, build};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::AnalysisError;
 
@@ -131,7 +131,7 @@ fn half_range(values: &[f64]) -> f64 {
 }
 
 /// A statement of the paper's, checked on this policy.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Claim {
     pub claim: String,
     pub ours: String,
@@ -139,12 +139,21 @@ pub struct Claim {
 }
 
 /// One orbit's figures (degrees).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct OrbitFigures {
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_deg: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub amplitude_deg: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub velocity_amplitude_degps: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub orbit_spread_percent: f64,
+}
+
+/// A joint's name beside its orbit's figures, as `phase.json` lists them.
+fn orbit(joint: &str, trace: &JointTrace) -> (String, OrbitFigures) {
+    (joint.to_owned(), OrbitFigures::of(trace))
 }
 
 impl OrbitFigures {
@@ -159,15 +168,15 @@ impl OrbitFigures {
 }
 
 /// `phase.json`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PhaseReport {
     pub forward_speed_mps: f64,
     pub climb_rate_mps: f64,
     pub turn_rate_degps: f64,
-    pub cruise: [(&'static str, OrbitFigures); 2],
-    pub climb: [(&'static str, OrbitFigures); 2],
+    pub cruise: [(String, OrbitFigures); 2],
+    pub climb: [(String, OrbitFigures); 2],
     /// Left and right wing (flap, pitch) while turning left; `None` when the policy cannot turn.
-    pub turn_left: Option<[(&'static str, OrbitFigures); 4]>,
+    pub turn_left: Option<[(String, OrbitFigures); 4]>,
     pub turn_skipped_because: Option<String>,
     pub claims: Vec<Claim>,
 }
@@ -239,15 +248,10 @@ pub fn phase_portraits(
         forward_speed_mps,
         climb_rate_mps: CLIMB_RATE_MPS,
         turn_rate_degps: TURN_RATE_DEGPS,
-        cruise: [("flap_right", OrbitFigures::of(&cf)), ("pitch_right", OrbitFigures::of(&cp))],
-        climb: [("flap_right", OrbitFigures::of(&lf)), ("pitch_right", OrbitFigures::of(&lp))],
+        cruise: [orbit("flap_right", &cf), orbit("pitch_right", &cp)],
+        climb: [orbit("flap_right", &lf), orbit("pitch_right", &lp)],
         turn_left: turn_traces.as_ref().map(|[a, b, c, d]| {
-            [
-                ("flap_left", OrbitFigures::of(a)),
-                ("pitch_left", OrbitFigures::of(b)),
-                ("flap_right", OrbitFigures::of(c)),
-                ("pitch_right", OrbitFigures::of(d)),
-            ]
+            [orbit("flap_left", a), orbit("pitch_left", b), orbit("flap_right", c), orbit("pitch_right", d)]
         }),
         turn_skipped_because,
         claims,

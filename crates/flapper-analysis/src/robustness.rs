@@ -176,6 +176,7 @@ pub struct Tally {
     pub successes: usize,
     pub success_rate: f64,
     /// Mean RMS position error of the successful episodes (m; NaN when none).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_rms_error_m: f64,
 }
 
@@ -215,15 +216,15 @@ pub struct WindRow {
 }
 
 /// One fluid setting's result (with the RMS error, which the CSV leaves out).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FluidResult {
-    pub coefficient: &'static str,
+    pub coefficient: String,
     pub range: f64,
     #[serde(flatten)]
     pub tally: Tally,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct WindResult {
     pub wind_mps: [f64; 3],
     pub name: String,
@@ -240,7 +241,7 @@ pub struct WindResult {
 /// ground velocity minus the wind, over every step of the path. A wind whose slowest need lies below
 /// the robot's slowest sustained level airspeed asks for flight it cannot hold (a tailwind on a slow
 /// reference); weaving to shed ground speed would be the only way.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NeededAirspeed {
     pub slowest_mps: f64,
     pub fastest_mps: f64,
@@ -273,7 +274,7 @@ impl NeededAirspeed {
     }
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct EnvelopeResult {
     /// Per level airspeed (m/s): its tally over straight and level flights.
     pub speeds: Vec<(f64, Tally)>,
@@ -287,14 +288,14 @@ pub struct EnvelopeResult {
 }
 
 /// `robustness.json`: every setting's figures, and the answers the paper gives.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RobustnessReport {
     pub reference: String,
     pub episodes: usize,
     pub seed: u64,
     pub fluid: Vec<FluidResult>,
     /// The single coefficient with the lowest success rate at the widest range (the paper: Kutta lift).
-    pub most_sensitive_coefficient: Option<&'static str>,
+    pub most_sensitive_coefficient: Option<String>,
     pub wind: Vec<WindResult>,
     pub table_iii: Option<Tally>,
     /// Table III's episodes whose drawn wind keeps every airspeed the reference asks for inside the
@@ -387,7 +388,7 @@ pub fn robustness(
                             tally.successes,
                             tally.episodes
                         ));
-                        report.fluid.push(FluidResult { coefficient: series.name(), range, tally });
+                        report.fluid.push(FluidResult { coefficient: series.name().to_owned(), range, tally });
                     }
                 }
                 report.most_sensitive_coefficient = most_sensitive(&report.fluid);
@@ -458,13 +459,13 @@ pub fn robustness(
 }
 
 /// The single coefficient with the lowest success rate at the widest range flown.
-fn most_sensitive(fluid: &[FluidResult]) -> Option<&'static str> {
+fn most_sensitive(fluid: &[FluidResult]) -> Option<String> {
     let widest = fluid.iter().map(|f| f.range).fold(f64::NEG_INFINITY, f64::max);
     fluid
         .iter()
         .filter(|f| f.range == widest && f.coefficient != FluidSeries::All.name() && widest > 0.0)
         .min_by(|a, b| a.tally.success_rate.total_cmp(&b.tally.success_rate))
-        .map(|f| f.coefficient)
+        .map(|f| f.coefficient.clone())
 }
 
 /// Writes `robustness.json`, `robustness_fluid.csv` and `robustness_fluid.svg` (when the fluid sweep

@@ -20,7 +20,7 @@ use flapper_task::reference::Reference;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::AnalysisError;
 use crate::fit::{FitSettings, Record, Validation, fit_common_denominator, fit_order, validate};
@@ -29,7 +29,7 @@ use crate::linear_system::TransferFunction;
 pub const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The experiment's settings; the defaults are what `flapper sysid` runs.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SysidSettings {
     pub cruise_speed_mps: f64,
     pub altitude_m: f64,
@@ -263,17 +263,21 @@ pub fn fly_records(
 }
 
 /// One axis's model as reported (the fields of `sysid.json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct AxisModel {
     pub numerator: Vec<f64>,
     pub denominator: Vec<f64>,
     /// [re, im] pairs.
     pub poles: Vec<[f64; 2]>,
     pub zeros: Vec<[f64; 2]>,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub dc_gain: f64,
     /// The input is the target perturbation this far ahead (s).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub input_lead_s: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mse_validation: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub fit_percent: f64,
     pub bibo_stable: bool,
     pub minimum_phase: bool,
@@ -298,7 +302,7 @@ impl AxisModel {
 }
 
 /// Per axis x, y, z.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct AxisModels {
     pub x: AxisModel,
     pub y: AxisModel,
@@ -312,17 +316,19 @@ impl AxisModels {
 }
 
 /// A model with `poles` poles and `poles - 1` zeros, fitted at the axis's lead, on the validation records.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct OrderFit {
     pub poles: usize,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub fit_percent: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mse_validation: f64,
     pub bibo_stable: bool,
     pub minimum_phase: bool,
 }
 
 /// Per axis, the validation of each model order tried, and the order that validated best.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct OrderSelection {
     pub orders: Vec<OrderFit>,
     pub best_poles: usize,
@@ -334,9 +340,9 @@ pub const ORDERS: std::ops::RangeInclusive<usize> = 1..=6;
 /// `sysid.json`: per axis the paper's eq. 9 form (three poles, two zeros) with its own denominator
 /// and input lead at the top level, the paper's shared denominator beside it, and how the data
 /// were made.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SysidReport {
-    pub method: &'static str,
+    pub method: String,
     #[serde(flatten)]
     pub per_axis: AxisModels,
     pub common_denominator: AxisModels,
@@ -411,8 +417,10 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<Identified
         OrderSelection { orders, best_poles }
     });
     let report = SysidReport {
-        method: "state-variable-filter least squares (Young's SVF, lambda = filter_pole_radps), third order, numerator \
-                 degree 2, per axis at the input lead whose model best predicts the identification records",
+        method:
+            "state-variable-filter least squares (Young's SVF, lambda = filter_pole_radps), third order, numerator \
+                 degree 2, per axis at the input lead whose model best predicts the identification records"
+                .to_owned(),
         per_axis: report_of(&separate),
         common_denominator: report_of(&common),
         order_selection,

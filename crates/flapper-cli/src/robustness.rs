@@ -103,7 +103,7 @@ pub fn robustness_command(robot: &RobotModel, args: RobustnessRequest) -> Result
             }
             println!();
         }
-        if let Some(name) = report.most_sensitive_coefficient {
+        if let Some(name) = &report.most_sensitive_coefficient {
             println!("most sensitive single coefficient (lowest success at the widest range): {name}");
         }
     }

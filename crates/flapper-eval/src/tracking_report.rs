@@ -19,25 +19,34 @@ pub const ANALYSED_JOINTS: [ActuatedJoint; 3] =
     [ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft, ActuatedJoint::TailPitch];
 
 /// Figures over all episodes of one controller on one reference.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrackingSummary {
     pub episodes: usize,
     pub completed: usize,
     /// Episodes that did not complete, by how they ended (termination reason name, count).
-    pub failures: Vec<(&'static str, usize)>,
+    pub failures: Vec<(String, usize)>,
     /// Mean over episodes of each episode's RMS position error.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_rms_error_m: f64,
     /// Worst RMS error of any episode.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub worst_rms_error_m: f64,
     /// Largest position error at any step of any episode.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub max_error_m: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_airspeed_mps: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_power_w: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_absolute_power_w: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub energy_per_metre_j: f64,
     /// Mean fundamental frequency and energy fraction of [`ANALYSED_JOINTS`] over the episodes
     /// (NaN where a joint does not move).
+    #[serde(deserialize_with = "flapper_files::nan_as_null::numbers")]
     pub frequency_hz: [f64; 3],
+    #[serde(deserialize_with = "flapper_files::nan_as_null::numbers")]
     pub energy_fraction: [f64; 3],
     /// Episodes that flew upside down at some point (|roll| beyond 90 deg): expected in loops,
     /// reported because evaluation never ends an episode on attitude.
@@ -48,18 +57,24 @@ pub struct TrackingSummary {
 
 /// Tracking through a reference's manoeuvre (its window from `manoeuvre_window_s`), over the episodes
 /// that flew through it.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ManoeuvreFigures {
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub start_s: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub end_s: f64,
     /// Episodes that were still flying at the manoeuvre's end.
     pub episodes: usize,
     /// Largest position error during the manoeuvre: mean over episodes and worst.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub mean_max_error_m: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub worst_max_error_m: f64,
     /// Time after the manoeuvre until within [`REJOIN_DISTANCE_M`] of the target: median and worst
     /// over the episodes that rejoined, and how many never did.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub median_rejoin_s: f64,
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
     pub worst_rejoin_s: f64,
     pub never_rejoined: usize,
 }
@@ -105,7 +120,7 @@ impl TrackingSummary {
         }
         let failures = flapper_task::termination::EpisodeEnd::ALL
             .iter()
-            .map(|end| (end.name(), results.iter().filter(|r| !r.completed() && r.end == *end).count()))
+            .map(|end| (end.name().to_owned(), results.iter().filter(|r| !r.completed() && r.end == *end).count()))
             .filter(|(_, n)| *n > 0)
             .collect();
         Self {

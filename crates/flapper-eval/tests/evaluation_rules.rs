@@ -78,7 +78,7 @@ fn completion_counts_episodes_that_reach_the_end_and_manoeuvre_figures_follow_th
     let results = vec![good, better, lost];
     let summary = TrackingSummary::of(&results, 0.02, manoeuvre_window_s("loop"));
     assert_eq!((summary.completed, summary.episodes), (2, 3));
-    assert_eq!(summary.failures, vec![("too_far", 1)]);
+    assert_eq!(summary.failures, vec![("too_far".to_owned(), 1)]);
     assert_eq!(summary.inverted_episodes, 3);
     let m: &ManoeuvreFigures = summary.manoeuvre.as_ref().unwrap();
     assert_eq!(m.episodes, 2, "the lost episode never flew through the loop");

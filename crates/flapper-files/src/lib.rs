@@ -1,7 +1,8 @@
 //! The one way flapper writes an output file: complete or absent, never half written. Every crate
 //! that writes files (learner checkpoints, plots, evaluation CSVs, the report) goes through it.
 //! [`write_csv_rows`] and [`write_csv_records`] write a CSV file of `Serialize` rows that way; [`decimals`] prints a row's
-//! numbers at the precision its file keeps.
+//! numbers at the precision its file keeps. [`write_json`] writes JSON, [`read_json`] reads it back as the type that
+//! wrote it ([`nan_as_null`] for numbers that may be NaN).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -86,9 +87,51 @@ pub mod decimals {
     }
 }
 
+/// Reads back a JSON file that [`write_json`] wrote, as the type that wrote it.
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// `deserialize_with` helpers for numbers that may be NaN. JSON has no NaN: serde_json writes NaN (and
+/// the infinities) as `null`, and then refuses `null` for an `f64`. A result field that can be NaN
+/// ("no episode completed", "the joint does not move") reads `null` back as NaN with
+/// `#[serde(deserialize_with = "flapper_files::nan_as_null::number")]` (or `::numbers` for an array).
+pub mod nan_as_null {
+    use serde::{Deserialize, Deserializer};
+
+    pub fn number<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(deserializer)?.unwrap_or(f64::NAN))
+    }
+
+    pub fn numbers<'de, D: Deserializer<'de>, const N: usize>(deserializer: D) -> Result<[f64; N], D::Error> {
+        let values = Vec::<Option<f64>>::deserialize(deserializer)?;
+        let count = values.len();
+        let numbers: Vec<f64> = values.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+        numbers.try_into().map_err(|_| serde::de::Error::invalid_length(count, &format!("{N} numbers").as_str()))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nan_written_as_null_reads_back_as_nan() {
+        #[derive(serde::Serialize, serde::Deserialize)]
+        struct Figures {
+            #[serde(deserialize_with = "nan_as_null::number")]
+            x: f64,
+            #[serde(deserialize_with = "nan_as_null::numbers")]
+            each: [f64; 3],
+        }
+        let text = serde_json::to_string(&Figures { x: f64::NAN, each: [1.5, f64::NAN, 2.0] }).unwrap();
+        assert_eq!(text, r#"{"x":null,"each":[1.5,null,2.0]}"#);
+        let back: Figures = serde_json::from_str(&text).unwrap();
+        assert!(back.x.is_nan() && back.each[1].is_nan());
+        assert_eq!((back.each[0], back.each[2]), (1.5, 2.0));
+        assert!(serde_json::from_str::<Figures>(r#"{"x":1.0,"each":[1.0,2.0]}"#).is_err(), "two numbers for three");
+    }
 
     #[test]
     fn a_row_prints_each_number_at_its_decimals() {

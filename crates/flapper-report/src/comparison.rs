@@ -1,12 +1,18 @@
-//! The "paper vs flapper" table. Each of our numbers is read back from a file the report run wrote
-//! (a JSON pointer into it) and formatted here; a row names its sources, so anyone (and a test) can
-//! check the page against the files.
+//! The "paper vs flapper" table: the paper's numbers ([`paper`]) beside ours, read from the report
+//! run's results ([`RunResults`]). Each of our numbers also names where it lies in the run's files (a
+//! JSON pointer into one), so anyone (and a test, through [`Source::read`]) can check the page
+//! against the files.
 
 use std::path::Path;
 
+use flapper_analysis::modes::SegmentFigures;
+use flapper_analysis::robustness::RobustnessReport;
+use flapper_analysis::sysid::{AXES, AxisModel};
+use flapper_eval::tracking_report::TrackingSummary;
 use serde_json::Value;
 
-use crate::ReportError;
+use crate::results::{ROBUSTNESS_REFERENCES, RunResults, files};
+use crate::{ReportError, paper};
 
 /// How a source's value is printed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,44 +105,78 @@ fn described<S: serde::Serializer>(sources: &[Source], serializer: S) -> Result<
     serializer.collect_str(&sources.iter().map(Source::describe).collect::<Vec<_>>().join(" "))
 }
 
-/// The table being built from the files of the report folder `out`.
+/// One of our numbers: its value, formatted (None where it was not measured), and where it lies in
+/// the run's files (for the CSV, and for anyone checking the page against the files).
+struct Figure {
+    source: Source,
+    value: Option<String>,
+}
+
+impl Figure {
+    fn number(file: &str, pointer: &str, value: Option<f64>, scale: f64, format: Format) -> Self {
+        let value = value.filter(|v| v.is_finite()).map(|v| match format {
+            Format::Scientific(d) => format!("{:.*e}", d, v * scale),
+            Format::Fixed(d) => format!("{:.*}", d, v * scale),
+            Format::YesNo | Format::Text => unreachable!("a number is printed fixed or scientific"),
+        });
+        Self { source: Source::new(file, pointer, scale, format), value }
+    }
+
+    fn yes_no(file: &str, pointer: &str, value: Option<bool>) -> Self {
+        let value = value.map(|yes| if yes { "yes".to_owned() } else { "no".to_owned() });
+        Self { source: Source::new(file, pointer, 1.0, Format::YesNo), value }
+    }
+
+    fn text(file: &str, pointer: &str, value: Option<&str>) -> Self {
+        Self { source: Source::new(file, pointer, 1.0, Format::Text), value: value.map(str::to_owned) }
+    }
+}
+
+/// The table being built from a report run's results.
 struct Table<'a> {
-    out: &'a Path,
+    results: &'a RunResults,
     rows: Vec<Row>,
 }
 
 impl Table<'_> {
-    /// Adds a row whose text `text` makes from its sources' values when every source is there;
+    /// Adds a row whose text `text` makes from its figures' values when every figure was measured;
     /// otherwise the row says "not measured".
-    fn row(&mut self, claim: &str, paper: &str, sources: Vec<Source>, text: &dyn Fn(&[String]) -> (String, String)) {
-        let values: Option<Vec<String>> = sources.iter().map(|s| s.read(self.out)).collect();
+    fn row(&mut self, claim: &str, paper: &str, figures: Vec<Figure>, text: &dyn Fn(&[String]) -> (String, String)) {
+        let values: Option<Vec<String>> = figures.iter().map(|f| f.value.clone()).collect();
         let (flapper, verdict) = match values {
             Some(v) => text(&v),
             None => ("not measured".into(), "-".into()),
         };
+        let sources = figures.into_iter().map(|f| f.source).collect();
         self.rows.push(Row { claim: claim.into(), paper: paper.into(), flapper, verdict, sources });
     }
 }
 
-/// What the paper says, and the files of a report run.
-pub fn compare(out: &Path) -> Result<Vec<Row>, ReportError> {
-    let mut table = Table { out, rows: Vec::new() };
+/// What the paper says beside what a report run measured.
+pub fn compare(results: &RunResults) -> Vec<Row> {
+    let mut table = Table { results, rows: Vec::new() };
     for add in [gait, flight_modes, identification, manoeuvres, training_cost, robustness, phase_portraits] {
         add(&mut table);
     }
-    Ok(table.rows)
+    table.rows
 }
 
 /// The learned gait: flapping frequency and the energy in its fundamental.
 fn gait(table: &mut Table) {
-    let cruise = "tracking/cruise/summary.json";
+    let (file, cruise) = (files::tracking("cruise"), table.results.tracking("cruise"));
+    let paper_hz = paper::FLAP_FREQUENCY_HZ;
     table.row(
         "learned flapping frequency (cruise at 3.8 m/s)",
-        "5.3 Hz",
-        (0..3).map(|k| Source::new(cruise, &format!("/summary/frequency_hz/{k}"), 1.0, Format::Fixed(2))).collect(),
+        &format!("{paper_hz} Hz"),
+        (0..3)
+            .map(|k| {
+                let value = cruise.map(|s| s.frequency_hz[k]);
+                Figure::number(&file, &format!("/summary/frequency_hz/{k}"), value, 1.0, Format::Fixed(2))
+            })
+            .collect(),
         &|v| {
             let flap: f64 = v[0].parse().unwrap_or(f64::NAN);
-            let off = 100.0 * (flap / 5.3 - 1.0);
+            let off = 100.0 * (flap / paper_hz - 1.0);
             (
                 format!("{} / {} / {} Hz (flap / wing pitch / tail)", v[0], v[1], v[2]),
                 if off.abs() <= 10.0 {
@@ -147,11 +187,15 @@ fn gait(table: &mut Table) {
             )
         },
     );
+    let (lowest, highest) = paper::FUNDAMENTAL_ENERGY_PERCENT;
     table.row(
         "energy in the fundamental frequency",
-        "36.8-38.7% (flap, wing pitch, tail)",
+        &format!("{lowest}-{highest}% (flap, wing pitch, tail)"),
         (0..3)
-            .map(|k| Source::new(cruise, &format!("/summary/energy_fraction/{k}"), 100.0, Format::Fixed(1)))
+            .map(|k| {
+                let value = cruise.map(|s| s.energy_fraction[k]);
+                Figure::number(&file, &format!("/summary/energy_fraction/{k}"), value, 100.0, Format::Fixed(1))
+            })
             .collect(),
         &|v| {
             let within = v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| (30.0..=45.0).contains(&p)));
@@ -166,16 +210,20 @@ fn gait(table: &mut Table) {
 /// Flight modes: gliding where the path allows it, and level flight at the speed of the paper's phase
 /// portraits.
 fn flight_modes(table: &mut Table) {
-    let modes = "modes/modes.json";
+    let segment = |k: usize, key: &str, of: fn(&SegmentFigures) -> f64, decimals: usize| {
+        let value = table.results.modes.as_ref().and_then(|m| m.segments.get(k)).map(of);
+        Figure::number(files::MODES, &format!("/segments/{k}/{key}"), value, 1.0, Format::Fixed(decimals))
+    };
+    let figures = vec![
+        segment(2, "glide_fraction", |s| s.glide_fraction, 2),
+        segment(3, "glide_fraction", |s| s.glide_fraction, 2),
+        segment(2, "flap_amplitude_deg", |s| s.flap_amplitude_deg, 0),
+        segment(0, "flap_amplitude_deg", |s| s.flap_amplitude_deg, 0),
+    ];
     table.row(
         "switches between flight modes: glides when possible (glide segment of longitudinal)",
         "glides instead of flapping when possible",
-        vec![
-            Source::new(modes, "/segments/2/glide_fraction", 1.0, Format::Fixed(2)),
-            Source::new(modes, "/segments/3/glide_fraction", 1.0, Format::Fixed(2)),
-            Source::new(modes, "/segments/2/flap_amplitude_deg", 1.0, Format::Fixed(0)),
-            Source::new(modes, "/segments/0/flap_amplitude_deg", 1.0, Format::Fixed(0)),
-        ],
+        figures,
         &|v| {
             let glides = v[0].parse::<f64>().is_ok_and(|f| f >= 0.5);
             (
@@ -187,12 +235,18 @@ fn flight_modes(table: &mut Table) {
             )
         },
     );
+    let slowest = table
+        .results
+        .robustness(ROBUSTNESS_REFERENCES[0])
+        .and_then(|r| r.envelope.as_ref())
+        .and_then(|e| e.slowest_sustained_mps);
     table.row(
         "level flight at 3 m/s (the phase portraits' speed)",
         "flown",
-        vec![Source::new(
-            "robustness/longitudinal/robustness.json",
+        vec![Figure::number(
+            &files::robustness(ROBUSTNESS_REFERENCES[0]),
             "/envelope/slowest_sustained_mps",
+            slowest,
             1.0,
             Format::Fixed(1),
         )],
@@ -208,14 +262,16 @@ fn flight_modes(table: &mut Table) {
 
 /// The identified closed loop: its error, poles and zeros.
 fn identification(table: &mut Table) {
-    let sysid = "sysid/sysid.json";
+    let axes = table.results.sysid.as_ref().map(|s| s.per_axis.each());
+    let axis = |k: usize| axes.map(|a| a[k].1);
+    let number = |k: usize, key: &str, of: fn(&AxisModel) -> f64, format: Format| {
+        Figure::number(files::SYSID, &format!("/{}/{key}", AXES[k]), axis(k).map(of), 1.0, format)
+    };
+    let paper_mse = paper::IDENTIFICATION_MSE_M2;
     table.row(
         "identification MSE of the closed loop",
-        "5.6e-5 m^2",
-        ["x", "y", "z"]
-            .iter()
-            .map(|a| Source::new(sysid, &format!("/{a}/mse_validation"), 1.0, Format::Scientific(1)))
-            .collect(),
+        &format!("{paper_mse:.1e} m^2"),
+        (0..3).map(|k| number(k, "mse_validation", |m| m.mse_validation, Format::Scientific(1))).collect(),
         &|v| {
             let worst = v.iter().filter_map(|x| x.parse::<f64>().ok()).fold(0.0, f64::max);
             (
@@ -223,7 +279,7 @@ fn identification(table: &mut Table) {
                 if worst <= 1e-4 {
                     "agrees".into()
                 } else {
-                    format!("higher: up to {:.0}x the paper's", worst / 5.6e-5)
+                    format!("higher: up to {:.0}x the paper's", worst / paper_mse)
                 },
             )
         },
@@ -231,12 +287,11 @@ fn identification(table: &mut Table) {
     table.row(
         "identified model's fit to validation flights (input: the target point ahead, lead estimated)",
         "not reported (input: the current desired position)",
-        ["x", "y", "z"]
-            .iter()
-            .flat_map(|a| {
+        (0..3)
+            .flat_map(|k| {
                 [
-                    Source::new(sysid, &format!("/{a}/fit_percent"), 1.0, Format::Fixed(1)),
-                    Source::new(sysid, &format!("/{a}/input_lead_s"), 1.0, Format::Fixed(2)),
+                    number(k, "fit_percent", |m| m.fit_percent, Format::Fixed(1)),
+                    number(k, "input_lead_s", |m| m.input_lead_s, Format::Fixed(2)),
                 ]
             })
             .collect(),
@@ -248,14 +303,16 @@ fn identification(table: &mut Table) {
             )
         },
     );
-    for (claim, key) in [
-        ("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable"),
-        ("zeros in the left half plane (minimum phase)", "minimum_phase"),
-    ] {
+    type Verdict = fn(&AxisModel) -> bool;
+    let verdicts: [(&str, &str, Verdict); 2] = [
+        ("closed-loop poles in the left half plane (BIBO stable)", "bibo_stable", |m| m.bibo_stable),
+        ("zeros in the left half plane (minimum phase)", "minimum_phase", |m| m.minimum_phase),
+    ];
+    for (claim, key, of) in verdicts {
         table.row(
             claim,
             "yes, every axis",
-            ["x", "y", "z"].iter().map(|a| Source::new(sysid, &format!("/{a}/{key}"), 1.0, Format::YesNo)).collect(),
+            (0..3).map(|k| Figure::yes_no(files::SYSID, &format!("/{}/{key}", AXES[k]), axis(k).map(of))).collect(),
             &|v| {
                 (
                     format!("x {}, y {}, z {}", v[0], v[1], v[2]),
@@ -274,18 +331,21 @@ fn manoeuvres(table: &mut Table) {
         ("roll-off-the-bottom", "roll-off-the-bottom in 1.8 s"),
         ("aerobatic", "aerobatic trajectory"),
     ] {
-        let file = format!("tracking/{name}/summary.json");
-        let mut sources = vec![
-            Source::new(&file, "/summary/completed", 1.0, Format::Fixed(0)),
-            Source::new(&file, "/summary/episodes", 1.0, Format::Fixed(0)),
-        ];
+        let (file, summary) = (files::tracking(name), table.results.tracking(name));
+        let count = |pointer: &str, of: fn(&TrackingSummary) -> usize| {
+            Figure::number(&file, pointer, summary.map(|s| of(s) as f64), 1.0, Format::Fixed(0))
+        };
+        let mut figures =
+            vec![count("/summary/completed", |s| s.completed), count("/summary/episodes", |s| s.episodes)];
         let manoeuvre = name != "aerobatic";
-        if manoeuvre {
-            sources.push(Source::new(&file, "/summary/manoeuvre/mean_max_error_m", 1.0, Format::Fixed(2)));
+        figures.push(if manoeuvre {
+            let value = summary.and_then(|s| s.manoeuvre.as_ref()).map(|m| m.mean_max_error_m);
+            Figure::number(&file, "/summary/manoeuvre/mean_max_error_m", value, 1.0, Format::Fixed(2))
         } else {
-            sources.push(Source::new(&file, "/summary/mean_rms_error_m", 1.0, Format::Fixed(2)));
-        }
-        table.row(claim, "flown, tracking the reference", sources, &|v| {
+            let value = summary.map(|s| s.mean_rms_error_m);
+            Figure::number(&file, "/summary/mean_rms_error_m", value, 1.0, Format::Fixed(2))
+        });
+        table.row(claim, "flown, tracking the reference", figures, &|v| {
             let (done, of): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(1.0));
             let detail = if manoeuvre {
                 format!("largest error in it {} m (mean)", v[2])
@@ -302,17 +362,30 @@ fn manoeuvres(table: &mut Table) {
 
 /// What training cost.
 fn training_cost(table: &mut Table) {
-    let training = "training/training.json";
+    let training = table.results.training.as_ref();
     table.row(
         "training cost",
-        "30 M steps in about 5 h on 8 cores",
+        &paper::training_cost(),
         vec![
-            Source::new(training, "/total_env_steps", 1e-6, Format::Fixed(1)),
-            Source::new(training, "/total_wall_time_s", 1.0 / 3600.0, Format::Fixed(2)),
+            Figure::number(
+                files::TRAINING,
+                "/total_env_steps",
+                training.map(|t| t.total_env_steps),
+                1e-6,
+                Format::Fixed(1),
+            ),
+            Figure::number(
+                files::TRAINING,
+                "/total_wall_time_s",
+                training.map(|t| t.total_wall_time_s),
+                1.0 / 3600.0,
+                Format::Fixed(2),
+            ),
         ],
         &|v| {
             let (steps, hours): (f64, f64) = (v[0].parse().unwrap_or(0.0), v[1].parse().unwrap_or(0.0));
-            let ratio = if hours > 0.0 { (steps / hours) / (30.0 / 5.0) } else { f64::NAN };
+            let paper_rate = paper::TRAINING_ENV_STEPS_MILLIONS / paper::TRAINING_HOURS;
+            let ratio = if hours > 0.0 { (steps / hours) / paper_rate } else { f64::NAN };
             (
                 format!("{} M steps in {} h (the whole curriculum, validation included)", v[0], v[1]),
                 format!("{ratio:.1}x the paper's steps per hour"),
@@ -323,32 +396,38 @@ fn training_cost(table: &mut Table) {
 
 /// Robustness to the fluid coefficients and to Table III at once.
 fn robustness(table: &mut Table) {
-    let robustness = |r: &str| format!("robustness/{r}/robustness.json");
-    let widest_all = |r: &str| -> Option<String> {
-        let json: Value = serde_json::from_str(&std::fs::read_to_string(table.out.join(robustness(r))).ok()?).ok()?;
-        let fluid = json.get("fluid")?.as_array()?;
-        let (k, _) = fluid
+    let swept: Vec<(&str, &RobustnessReport)> =
+        ROBUSTNESS_REFERENCES.iter().filter_map(|&r| Some((r, table.results.robustness(r)?))).collect();
+    // All five coefficients at once, at the widest range flown.
+    let widest_all = |report: &RobustnessReport| {
+        report
+            .fluid
             .iter()
             .enumerate()
-            .filter(|(_, f)| f["coefficient"] == "all")
-            .max_by(|a, b| a.1["range"].as_f64().partial_cmp(&b.1["range"].as_f64()).expect("finite ranges"))?;
-        Some(format!("/fluid/{k}/success_rate"))
+            .filter(|(_, f)| f.coefficient == "all")
+            .max_by(|a, b| a.1.range.total_cmp(&b.1.range))
+            .map(|(k, f)| (k, f.tally.success_rate))
     };
-    let pointers: Vec<Source> = ["longitudinal", "lateral"]
+    let figures: Vec<Figure> = swept
         .iter()
-        .filter_map(|r| widest_all(r).map(|p| Source::new(&robustness(r), &p, 100.0, Format::Fixed(0))))
+        .filter_map(|(r, report)| {
+            let (k, rate) = widest_all(report)?;
+            Some(Figure::number(
+                &files::robustness(r),
+                &format!("/fluid/{k}/success_rate"),
+                Some(rate),
+                100.0,
+                Format::Fixed(0),
+            ))
+        })
         .collect();
     table.row(
         "success with all five fluid coefficients randomized x[0.5, 1.5]",
         "relatively successful (Fig. 9)",
-        pointers,
+        figures,
         &|v| {
-            let text = v
-                .iter()
-                .zip(["longitudinal", "lateral"])
-                .map(|(x, r)| format!("{r} {x}%"))
-                .collect::<Vec<_>>()
-                .join(", ");
+            let text =
+                v.iter().zip(ROBUSTNESS_REFERENCES).map(|(x, r)| format!("{r} {x}%")).collect::<Vec<_>>().join(", ");
             let ok = v.len() == 2 && v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| p >= 80.0));
             (text, if ok { "agrees (>= 80%)".into() } else { "partly: below 80% somewhere".into() })
         },
@@ -356,9 +435,12 @@ fn robustness(table: &mut Table) {
     table.row(
         "most sensitive fluid coefficient",
         "Kutta lift C_K",
-        ["longitudinal", "lateral"]
+        ROBUSTNESS_REFERENCES
             .iter()
-            .map(|r| Source::new(&robustness(r), "/most_sensitive_coefficient", 1.0, Format::Text))
+            .map(|&r| {
+                let value = table.results.robustness(r).and_then(|j| j.most_sensitive_coefficient.as_deref());
+                Figure::text(&files::robustness(r), "/most_sensitive_coefficient", value)
+            })
             .collect(),
         &|v| {
             (
@@ -376,9 +458,12 @@ fn robustness(table: &mut Table) {
     table.row(
         "everything in Table III randomized at once",
         "tracks (Fig. 8)",
-        ["longitudinal", "lateral"]
+        ROBUSTNESS_REFERENCES
             .iter()
-            .map(|r| Source::new(&robustness(r), "/table_iii/success_rate", 100.0, Format::Fixed(0)))
+            .map(|&r| {
+                let value = table.results.robustness(r).and_then(|j| j.table_iii).map(|t| t.success_rate);
+                Figure::number(&files::robustness(r), "/table_iii/success_rate", value, 100.0, Format::Fixed(0))
+            })
             .collect(),
         &|v| {
             let ok = v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| p >= 90.0));
@@ -392,20 +477,14 @@ fn robustness(table: &mut Table) {
 
 /// The phase portraits' claims, one row each, as `flapper phase` checks them.
 fn phase_portraits(table: &mut Table) {
-    let claims = std::fs::read_to_string(table.out.join("phase/phase.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
-        .and_then(|j| j["claims"].as_array().map(|a| a.len()))
-        .unwrap_or(0);
-    for k in 0..claims {
-        let claim = Source::new("phase/phase.json", &format!("/claims/{k}/claim"), 1.0, Format::Text);
-        let paper = claim.read(table.out).unwrap_or_default();
+    let claims = table.results.phase.as_ref().map(|p| p.claims.as_slice()).unwrap_or_default();
+    for (k, claim) in claims.iter().enumerate() {
         table.row(
-            &format!("phase portrait (Fig. 6-7): {paper}"),
+            &format!("phase portrait (Fig. 6-7): {}", claim.claim),
             "as stated",
             vec![
-                Source::new("phase/phase.json", &format!("/claims/{k}/ours"), 1.0, Format::Text),
-                Source::new("phase/phase.json", &format!("/claims/{k}/confirmed"), 1.0, Format::YesNo),
+                Figure::text(files::PHASE, &format!("/claims/{k}/ours"), Some(&claim.ours)),
+                Figure::yes_no(files::PHASE, &format!("/claims/{k}/confirmed"), Some(claim.confirmed)),
             ],
             &|v| {
                 (

@@ -20,6 +20,17 @@ use crate::{ReportError, ReportSettings, write_json};
 pub const TRACKED_REFERENCES: [&str; 8] =
     ["cruise", "longitudinal", "lateral", "sharp-turn", "loop", "roll-off-the-bottom", "immelmann", "aerobatic"];
 
+/// `tracking/NAME/summary.json`: what was flown, and the figures `flapper eval` prints.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrackingFile {
+    pub reference: String,
+    pub duration_s: f64,
+    pub episodes: usize,
+    pub seed: u64,
+    pub policy: String,
+    pub summary: TrackingSummary,
+}
+
 /// One reference flown from randomized starts.
 pub struct Tracked {
     pub name: String,
@@ -54,15 +65,15 @@ pub fn tracking(
         .map_err(|e| ReportError::step(format!("tracking on {name}"), e))?;
     let summary = TrackingSummary::of(&results, period_s, flapper_task::reference::named::manoeuvre_window_s(name));
     create(dir)?;
-    let json = serde_json::json!({
-        "reference": name,
-        "duration_s": reference.duration_s(),
-        "episodes": settings.episodes,
-        "seed": settings.seed,
-        "policy": settings.policy.display().to_string(),
-        "summary": summary,
-    });
-    write_json(&dir.join("summary.json"), &json)?;
+    let file = TrackingFile {
+        reference: name.to_owned(),
+        duration_s: reference.duration_s(),
+        episodes: settings.episodes,
+        seed: settings.seed,
+        policy: settings.policy.display().to_string(),
+        summary,
+    };
+    write_json(&dir.join("summary.json"), &file)?;
     write_tracking_plots(&results, &format!("policy on {name}"), dir, 3)
         .map_err(|e| ReportError::step(format!("plots of {name}"), e))?;
     Ok(Tracked { name: name.to_owned(), reference, results, period_s })

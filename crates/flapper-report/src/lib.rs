@@ -1,13 +1,15 @@
 //! The report, last in the flow: every experiment behind the paper's figures run with the shipped
 //! policies (tracking on the named references, system identification, phase portraits, robustness
 //! sweeps), rendered snapshots and a flight video, and one page (`index.html`, `report.md`) that
-//! shows them beside the paper's numbers. Every number on the page is read back from the CSV and
-//! JSON files the run wrote ([`comparison`]).
+//! shows them beside the paper's numbers ([`paper`]). Every number on the page is read back from the
+//! JSON files the run wrote, as the types that wrote them ([`results`]).
 
 pub mod comparison;
 mod experiments;
 mod page;
+pub mod paper;
 mod pictures;
+pub mod results;
 mod tables;
 
 use std::path::{Path, PathBuf};
@@ -16,7 +18,8 @@ use std::sync::Arc;
 use flapper_eval::tracking::TrackingController;
 use flapper_sim::RobotModel;
 
-pub use experiments::TRACKED_REFERENCES;
+pub use experiments::{TRACKED_REFERENCES, TrackingFile};
+pub use tables::{ModelTables, RandomizationUsed, RobotFigures, SurfaceCoefficients, TrainedStage, TrainingTable};
 
 /// What to run. The defaults regenerate the README's report in about 10 minutes on 2 cores.
 #[derive(Debug, Clone)]
@@ -179,22 +182,26 @@ pub fn generate(
     }
     tables::training(&settings.curriculum, &out.join("training"))?;
     tables::model_tables(robot, &task, &out.join("tables"))?;
-    let rows = comparison::compare(out)?;
+    let results = results::RunResults::read(out);
+    let rows = comparison::compare(&results);
     comparison::write_csv(&rows, &out.join("paper_vs_flapper.csv"))?;
     let wall_time_s = began.elapsed().as_secs_f64();
-    let (index_html, report_md) = page::write(out, settings, &rows, &notes, wall_time_s)?;
+    let (index_html, report_md) = page::write(out, &results, settings, &rows, &notes, wall_time_s)?;
     progress("page");
     Ok(ReportOutcome { index_html, report_md, notes, wall_time_s })
 }
 
-/// Writes `bytes` to `path` complete or not at all.
-/// Writes `value` as JSON into `path` ([`flapper_files::write_json`]), creating its folder.
+/// Writes `value` as JSON into `path` ([`flapper_files::write_json`]), creating its folder. The
+/// report's own files list their keys in alphabetical order at every level (as `serde_json::Value`
+/// holds them), whatever order the type declares.
 fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), ReportError> {
     create_parent(path)?;
-    flapper_files::write_json(path, value)
-        .map_err(|e| ReportError::Write { path: path.to_owned(), message: e.to_string() })
+    let fail = |message: String| ReportError::Write { path: path.to_owned(), message };
+    let sorted = serde_json::to_value(value).map_err(|e| fail(e.to_string()))?;
+    flapper_files::write_json(path, &sorted).map_err(|e| fail(e.to_string()))
 }
 
+/// Writes `bytes` to `path` complete or not at all.
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     create_parent(path)?;
     flapper_plot::write_atomically(path, bytes)

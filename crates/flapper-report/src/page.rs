@@ -3,11 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
-
 use crate::comparison::Row;
 use crate::experiments::TRACKED_REFERENCES;
-use crate::{ReportError, ReportSettings, write_file};
+use crate::results::{ROBUSTNESS_REFERENCES, RunResults};
+use crate::{ReportError, ReportSettings, paper, write_file};
 
 /// A piece of a section.
 enum Block {
@@ -23,39 +22,47 @@ struct Section {
     blocks: Vec<Block>,
 }
 
-fn json(out: &Path, file: &str) -> Value {
-    std::fs::read_to_string(out.join(file)).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or(Value::Null)
+/// `x` with `decimals` decimals, or "-" where it was not measured (NaN, written as null).
+fn fixed(x: f64, decimals: usize) -> String {
+    scaled(x, 1.0, decimals)
 }
 
-fn fixed(v: &Value, decimals: usize) -> String {
-    scaled(v, 1.0, decimals)
+/// `x` times `factor` (a unit change), or "-" where it was not measured.
+fn scaled(x: f64, factor: f64, decimals: usize) -> String {
+    if x.is_finite() { format!("{:.decimals$}", x * factor) } else { "-".into() }
 }
 
-/// `v` times `factor` (a unit change), or "-" when `v` is not a number.
-fn scaled(v: &Value, factor: f64, decimals: usize) -> String {
-    v.as_f64().map_or("-".into(), |x| format!("{:.decimals$}", x * factor))
+/// A figure of a result that may be missing, or "-".
+fn or_dash<T>(value: Option<T>, show: impl FnOnce(T) -> String) -> String {
+    value.map_or_else(|| "-".into(), show)
 }
 
-fn polynomial(coefficients: &Value) -> String {
-    let c: Vec<f64> = coefficients.as_array().map(|a| a.iter().filter_map(Value::as_f64).collect()).unwrap_or_default();
-    flapper_analysis::linear_system::polynomial_text(&c)
+fn header(names: &[&str]) -> Vec<String> {
+    names.iter().map(|n| (*n).to_owned()).collect()
 }
 
-fn sections(out: &Path, settings: &ReportSettings, rows: &[Row], notes: &[String], wall_time_s: f64) -> Vec<Section> {
+fn sections(
+    out: &Path,
+    results: &RunResults,
+    settings: &ReportSettings,
+    rows: &[Row],
+    notes: &[String],
+    wall_time_s: f64,
+) -> Vec<Section> {
     vec![
         intro(settings, notes, wall_time_s),
         paper_vs_flapper(rows),
         fig1_robot(),
         fig2_loop(),
-        fig3_gait(out),
-        fig5_sysid(out),
-        fig6_7_phase(out),
-        fig8_tracking_and_wind(out),
+        fig3_gait(results),
+        fig5_sysid(results),
+        fig6_7_phase(out, results),
+        fig8_tracking_and_wind(results),
         fig9_fluid(),
         fig10_11_manoeuvres(),
-        tracking(out),
-        tables_ii_iii(out),
-        training(out),
+        tracking(results),
+        tables_ii_iii(results),
+        training(results),
     ]
 }
 
@@ -86,10 +93,7 @@ fn paper_vs_flapper(rows: &[Row]) -> Section {
         rows.iter().map(|r| vec![r.claim.clone(), r.paper.clone(), r.flapper.clone(), r.verdict.clone()]).collect();
     Section {
         title: "Paper vs flapper".into(),
-        blocks: vec![Block::Table(
-            vec!["claim".into(), "paper".into(), "flapper (this run)".into(), "verdict".into()],
-            comparison,
-        )],
+        blocks: vec![Block::Table(header(&["claim", "paper", "flapper (this run)", "verdict"]), comparison)],
     }
 }
 
@@ -116,9 +120,11 @@ fn fig2_loop() -> Section {
 }
 
 /// Fig. 3: the learned gait and its frequencies.
-fn fig3_gait(out: &Path) -> Section {
-    let cruise = json(out, "tracking/cruise/summary.json");
-    let s = &cruise["summary"];
+fn fig3_gait(results: &RunResults) -> Section {
+    let cruise = results.tracking("cruise");
+    let frequency = |k: usize| or_dash(cruise, |s| fixed(s.frequency_hz[k], 2));
+    let energy = |k: usize| or_dash(cruise, |s| scaled(s.energy_fraction[k], 100.0, 1));
+    let (lowest, highest) = paper::FUNDAMENTAL_ENERGY_PERCENT;
     Section {
         title: "Fig. 3: the learned gait".into(),
         blocks: vec![
@@ -127,40 +133,46 @@ fn fig3_gait(out: &Path) -> Section {
                 "tracking/cruise/joints.svg",
             ),
             Block::Text(format!(
-                "Fundamental frequency (energy fraction): flap {} Hz ({}%), wing pitch {} Hz ({}%), tail {} Hz ({}%); the paper: 5.3 Hz, 36.8-38.7%.",
-                fixed(&s["frequency_hz"][0], 2),
-                scaled(&s["energy_fraction"][0], 100.0, 1),
-                fixed(&s["frequency_hz"][1], 2),
-                scaled(&s["energy_fraction"][1], 100.0, 1),
-                fixed(&s["frequency_hz"][2], 2),
-                scaled(&s["energy_fraction"][2], 100.0, 1),
+                "Fundamental frequency (energy fraction): flap {} Hz ({}%), wing pitch {} Hz ({}%), tail {} Hz ({}%); the paper: {} Hz, {lowest}-{highest}%.",
+                frequency(0),
+                energy(0),
+                frequency(1),
+                energy(1),
+                frequency(2),
+                energy(2),
+                paper::FLAP_FREQUENCY_HZ,
             )),
         ],
     }
 }
 
 /// Fig. 5: the identified closed loop.
-fn fig5_sysid(out: &Path) -> Section {
-    let sysid = json(out, "sysid/sysid.json");
-    let mut tf_rows = Vec::new();
-    for axis in ["x", "y", "z"] {
-        let m = &sysid[axis];
-        tf_rows.push(vec![
-            axis.to_owned(),
-            polynomial(&m["numerator"]),
-            polynomial(&m["denominator"]),
-            fixed(&m["input_lead_s"], 2),
-            m["mse_validation"].as_f64().map_or("-".into(), |x| format!("{x:.2e}")),
-            fixed(&m["fit_percent"], 1),
-            format!("{}", m["bibo_stable"]),
-            format!("{}", m["minimum_phase"]),
-        ]);
-    }
+fn fig5_sysid(results: &RunResults) -> Section {
+    let tf_rows = match &results.sysid {
+        Some(sysid) => sysid
+            .per_axis
+            .each()
+            .iter()
+            .map(|(axis, m)| {
+                vec![
+                    (*axis).to_owned(),
+                    flapper_analysis::linear_system::polynomial_text(&m.numerator),
+                    flapper_analysis::linear_system::polynomial_text(&m.denominator),
+                    fixed(m.input_lead_s, 2),
+                    if m.mse_validation.is_finite() { format!("{:.2e}", m.mse_validation) } else { "-".into() },
+                    fixed(m.fit_percent, 1),
+                    m.bibo_stable.to_string(),
+                    m.minimum_phase.to_string(),
+                ]
+            })
+            .collect(),
+        None => Vec::new(),
+    };
     Section {
         title: "Fig. 5: system identification".into(),
         blocks: vec![
             Block::Table(
-                [
+                header(&[
                     "axis",
                     "numerator",
                     "denominator",
@@ -169,9 +181,7 @@ fn fig5_sysid(out: &Path) -> Section {
                     "fit (%)",
                     "BIBO stable",
                     "minimum phase",
-                ]
-                .map(String::from)
-                .to_vec(),
+                ]),
                 tf_rows,
             ),
             figure(
@@ -192,10 +202,13 @@ fn fig5_sysid(out: &Path) -> Section {
 }
 
 /// Figs. 6-7: phase portraits.
-fn fig6_7_phase(out: &Path) -> Section {
-    let speed = json(out, "phase/phase.json")["forward_speed_mps"].as_f64().map_or("-".into(), |v| format!("{v}"));
+fn fig6_7_phase(out: &Path, results: &RunResults) -> Section {
+    let speed = or_dash(results.phase.as_ref(), |p| p.forward_speed_mps.to_string());
     let mut phase = vec![figure(
-        &format!("Right wing, cruise vs climb at {speed} m/s (the paper's Fig. 6 flies 3 m/s)."),
+        &format!(
+            "Right wing, cruise vs climb at {speed} m/s (the paper's Fig. 6 flies {} m/s).",
+            flapper_analysis::phase::PAPER_FORWARD_SPEED_MPS
+        ),
         "phase/phase_climb.svg",
     )];
     if out.join("phase/phase_turn.svg").exists() {
@@ -205,77 +218,61 @@ fn fig6_7_phase(out: &Path) -> Section {
 }
 
 /// Fig. 8: tracking, the level-flight envelope and constant winds.
-fn fig8_tracking_and_wind(out: &Path) -> Section {
+fn fig8_tracking_and_wind(results: &RunResults) -> Section {
     let mut fig8 = vec![
         figure("Longitudinal tracking: top and side views.", "tracking/longitudinal/path.svg"),
         figure("Lateral tracking: top and side views.", "tracking/lateral/path.svg"),
     ];
-    for r in ["longitudinal", "lateral"] {
+    for r in ROBUSTNESS_REFERENCES {
         fig8.push(figure(
             &format!("Paths under constant winds on {r} (wind vectors drawn)."),
             &format!("robustness/{r}/robustness_wind.svg"),
         ));
     }
-    let envelope = json(out, "robustness/longitudinal/robustness.json");
-    let e = &envelope["envelope"];
-    if !e.is_null() {
+    // The envelope (level flight) does not depend on the reference: the first reference's serves all.
+    let swept = results.robustness(ROBUSTNESS_REFERENCES[0]);
+    let envelope = swept.and_then(|r| r.envelope.as_ref());
+    if let Some(e) = envelope {
+        let speed = |v: Option<f64>| or_dash(v, |v| fixed(v, 1));
         fig8.push(Block::Text(format!(
             "Level-flight airspeed envelope (15 s at each airspeed, >= 90% completed): {} to {} m/s. A reference flown at 3.8 m/s ground speed \
              with a tailwind of w m/s needs 3.8 - w m/s of airspeed: below the envelope's slowest, the reference cannot be flown straight. \
              The tables give, per wind, the airspeeds the reference asks for and whether they lie inside the envelope.",
-            fixed(&e["slowest_sustained_mps"], 1),
-            fixed(&e["fastest_sustained_mps"], 1)
+            speed(e.slowest_sustained_mps),
+            speed(e.fastest_sustained_mps)
         )));
     }
-    let (table_iii, inside) = (&envelope["table_iii"], &envelope["table_iii_inside_envelope"]);
-    if !table_iii.is_null() && !inside.is_null() {
+    if let Some((all, inside)) = swept.and_then(|r| Some((r.table_iii?, r.table_iii_inside_envelope?))) {
         fig8.push(Block::Text(format!(
-            "Table III at once on longitudinal: {}/{} completed; of the episodes whose drawn wind keeps the reference's airspeeds inside the envelope, {}/{}.",
-            table_iii["successes"], table_iii["episodes"], inside["successes"], inside["episodes"]
+            "Table III at once on {}: {}/{} completed; of the episodes whose drawn wind keeps the reference's airspeeds inside the envelope, {}/{}.",
+            ROBUSTNESS_REFERENCES[0], all.successes, all.episodes, inside.successes, inside.episodes
         )));
     }
-    for r in ["longitudinal", "lateral"] {
-        let j = json(out, &format!("robustness/{r}/robustness.json"));
-        let rows: Vec<Vec<String>> = j["wind"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .map(|w| {
-                        vec![
-                            w["name"].as_str().unwrap_or("").to_owned(),
-                            format!(
-                                "({}, {}, {})",
-                                fixed(&w["wind_mps"][0], 1),
-                                fixed(&w["wind_mps"][1], 1),
-                                fixed(&w["wind_mps"][2], 1)
-                            ),
-                            format!("{}/{}", w["successes"], w["episodes"]),
-                            fixed(&w["mean_rms_error_m"], 3),
-                            format!(
-                                "{}-{}",
-                                fixed(&w["needed_airspeed"]["slowest_mps"], 1),
-                                fixed(&w["needed_airspeed"]["fastest_mps"], 1)
-                            ),
-                            // The envelope (level flight) does not depend on the reference: the
-                            // longitudinal run's serves the others.
-                            match w["inside_envelope"]
-                                .as_bool()
-                                .or_else(|| inside_longitudinal_envelope(&w["needed_airspeed"], e))
-                            {
-                                Some(true) => "inside".to_owned(),
-                                Some(false) => "outside".to_owned(),
-                                None => "not measured".to_owned(),
-                            },
-                        ]
-                    })
-                    .collect()
+    for r in ROBUSTNESS_REFERENCES {
+        let winds = results.robustness(r).map(|j| j.wind.as_slice()).unwrap_or_default();
+        let rows: Vec<Vec<String>> = winds
+            .iter()
+            .map(|w| {
+                let [x, y, z] = w.wind_mps.map(|v| fixed(v, 1));
+                let needed = w.needed_airspeed;
+                let inside = w.inside_envelope.or_else(|| envelope.and_then(|e| needed.inside(e)));
+                vec![
+                    w.name.clone(),
+                    format!("({x}, {y}, {z})"),
+                    format!("{}/{}", w.tally.successes, w.tally.episodes),
+                    fixed(w.tally.mean_rms_error_m, 3),
+                    format!("{}-{}", fixed(needed.slowest_mps, 1), fixed(needed.fastest_mps, 1)),
+                    match inside {
+                        Some(true) => "inside".to_owned(),
+                        Some(false) => "outside".to_owned(),
+                        None => "not measured".to_owned(),
+                    },
+                ]
             })
-            .unwrap_or_default();
+            .collect();
         fig8.push(Block::Text(format!("Constant winds on {r}:")));
         fig8.push(Block::Table(
-            ["wind", "vector (m/s)", "success", "RMS error (m)", "airspeed needed (m/s)", "level envelope"]
-                .map(String::from)
-                .to_vec(),
+            header(&["wind", "vector (m/s)", "success", "RMS error (m)", "airspeed needed (m/s)", "level envelope"]),
             rows,
         ));
     }
@@ -285,7 +282,7 @@ fn fig8_tracking_and_wind(out: &Path) -> Section {
 /// Fig. 9: robustness to the fluid coefficients.
 fn fig9_fluid() -> Section {
     let mut fig9 = Vec::new();
-    for r in ["longitudinal", "lateral"] {
+    for r in ROBUSTNESS_REFERENCES {
         fig9.push(figure(
             &format!(
                 "Success rate on {r} as each fluid coefficient (and all five) is randomized over x[1 - r, 1 + r]."
@@ -317,26 +314,30 @@ fn fig10_11_manoeuvres() -> Section {
 }
 
 /// Tracking on every named reference, and the flight modes.
-fn tracking(out: &Path) -> Section {
-    let mut tracking_rows = Vec::new();
-    for name in TRACKED_REFERENCES {
-        let j = json(out, &format!("tracking/{name}/summary.json"));
-        let s = &j["summary"];
-        tracking_rows.push(vec![
-            name.to_owned(),
-            format!("{}/{}", s["completed"], s["episodes"]),
-            fixed(&s["mean_rms_error_m"], 3),
-            fixed(&s["worst_rms_error_m"], 3),
-            fixed(&s["max_error_m"], 3),
-            fixed(&s["mean_airspeed_mps"], 2),
-            fixed(&s["mean_absolute_power_w"], 2),
-        ]);
-    }
+fn tracking(results: &RunResults) -> Section {
+    let tracking_rows = TRACKED_REFERENCES
+        .iter()
+        .map(|&name| {
+            let s = results.tracking(name);
+            let number = |f: &dyn Fn(&flapper_eval::tracking_report::TrackingSummary) -> f64, decimals: usize| {
+                or_dash(s, |s| fixed(f(s), decimals))
+            };
+            vec![
+                name.to_owned(),
+                or_dash(s, |s| format!("{}/{}", s.completed, s.episodes)),
+                number(&|s| s.mean_rms_error_m, 3),
+                number(&|s| s.worst_rms_error_m, 3),
+                number(&|s| s.max_error_m, 3),
+                number(&|s| s.mean_airspeed_mps, 2),
+                number(&|s| s.mean_absolute_power_w, 2),
+            ]
+        })
+        .collect();
     Section {
         title: "Tracking on every named reference".into(),
         blocks: vec![
             Block::Table(
-                [
+                header(&[
                     "reference",
                     "completed",
                     "RMS error mean (m)",
@@ -344,9 +345,7 @@ fn tracking(out: &Path) -> Section {
                     "max error (m)",
                     "airspeed (m/s)",
                     "power, absolute (W)",
-                ]
-                .map(String::from)
-                .to_vec(),
+                ]),
                 tracking_rows,
             ),
             figure(
@@ -358,110 +357,104 @@ fn tracking(out: &Path) -> Section {
 }
 
 /// Tables II and III as the run used them.
-fn tables_ii_iii(out: &Path) -> Section {
-    let tables = json(out, "tables/tables.json");
-    let robot = &tables["robot"];
-    let mut table_ii: Vec<Vec<String>> = tables["table_ii"]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .map(|g| {
-                    let mut row = vec![g["geom"].as_str().unwrap_or("").to_owned()];
-                    row.extend(
-                        ["blunt_drag", "slender_drag", "angular_drag", "kutta_lift", "magnus_lift"]
-                            .map(|k| fixed(&g[k], 2)),
-                    );
-                    row
-                })
-                .collect()
+fn tables_ii_iii(results: &RunResults) -> Section {
+    let tables = results.tables.as_ref();
+    let mut table_ii: Vec<Vec<String>> = tables
+        .map(|t| t.table_ii.as_slice())
+        .unwrap_or_default()
+        .iter()
+        .map(|g| {
+            let mut row = vec![g.geom.clone()];
+            row.extend(
+                [g.blunt_drag, g.slender_drag, g.angular_drag, g.kutta_lift, g.magnus_lift].map(|c| fixed(c, 2)),
+            );
+            row
         })
-        .unwrap_or_default();
-    table_ii.insert(0, vec!["paper".into(), "0.2".into(), "0.12".into(), "1.5".into(), "3.14".into(), "1".into()]);
-    let r = &tables["table_iii"]["randomization"];
-    let interval = |k: &str| format!("x[{}, {}]", fixed(&r[k][0], 2), fixed(&r[k][1], 2));
-    let table_iii = vec![
-        vec!["joint damping".into(), interval("joint_damping_scale"), "x[0.9, 1.1]".into()],
-        vec!["link mass".into(), interval("link_mass_scale"), "x[0.9, 1.1]".into()],
-        vec!["link inertia".into(), interval("link_inertia_scale"), "x[0.9, 1.1]".into()],
-        vec![
-            "centre of mass".into(),
-            format!("+-{} mm", scaled(&r["link_com_offset_m"], 1000.0, 0)),
-            "+-50 mm (ours: README, Randomization)".into(),
-        ],
-        vec!["fluid coefficients (each)".into(), interval("fluid_coefficient_scale"), "x[0.7, 1.3]".into()],
-        vec!["added mass".into(), interval("added_mass_scale"), "x[0.9, 1.1]".into()],
-        vec!["added inertia".into(), interval("added_inertia_scale"), "x[0.9, 1.1]".into()],
-        vec![
-            "wind x, y, z".into(),
-            format!(
-                "+-{}, +-{}, +-{} m/s",
-                fixed(&r["wind_mps"][0], 1),
-                fixed(&r["wind_mps"][1], 1),
-                fixed(&r["wind_mps"][2], 1)
-            ),
-            "+-2, +-2, +-1.5 m/s".into(),
-        ],
-        vec!["share of episodes randomized".into(), fixed(&r["episode_fraction"], 2), "1".into()],
+        .collect();
+    table_ii.insert(0, std::iter::once("paper".to_owned()).chain(paper::TABLE_II.map(|c| c.to_string())).collect());
+    let r = tables.map(|t| &t.table_iii.randomization);
+    let interval = |k: fn(&flapper_task::config::RandomizationConfig) -> [f64; 2]| {
+        or_dash(r, |r| format!("x[{}, {}]", fixed(k(r)[0], 2), fixed(k(r)[1], 2)))
+    };
+    let ours = [
+        ("joint damping", interval(|r| r.joint_damping_scale)),
+        ("link mass", interval(|r| r.link_mass_scale)),
+        ("link inertia", interval(|r| r.link_inertia_scale)),
+        ("centre of mass", or_dash(r, |r| format!("+-{} mm", scaled(r.link_com_offset_m, 1000.0, 0)))),
+        ("fluid coefficients (each)", interval(|r| r.fluid_coefficient_scale)),
+        ("added mass", interval(|r| r.added_mass_scale)),
+        ("added inertia", interval(|r| r.added_inertia_scale)),
+        (
+            "wind x, y, z",
+            or_dash(r, |r| {
+                let [x, y, z] = r.wind_mps.map(|v| fixed(v, 1));
+                format!("+-{x}, +-{y}, +-{z} m/s")
+            }),
+        ),
+        ("share of episodes randomized", or_dash(r, |r| fixed(r.episode_fraction, 2))),
     ];
+    let table_iii = ours
+        .into_iter()
+        .zip(paper::TABLE_III)
+        .map(|((parameter, flapper), paper)| vec![parameter.to_owned(), flapper, paper.to_owned()])
+        .collect();
+    let robot = or_dash(tables.map(|t| &t.robot), |robot| {
+        format!(
+            "Robot: {} kg, wingspan {} m, mean chord {} m, {} degrees of freedom, {} actuators; simulation {} Hz, policy {} Hz, action filter {} Hz.",
+            fixed(robot.total_mass_kg, 3),
+            fixed(robot.wingspan_m, 3),
+            fixed(robot.mean_chord_m, 3),
+            robot.degrees_of_freedom,
+            robot.actuators,
+            fixed(robot.simulation_hz, 0),
+            fixed(robot.control_hz, 0),
+            fixed(robot.filter_cutoff_hz, 1)
+        )
+    });
     Section {
         title: "Tables II and III as used".into(),
         blocks: vec![
-            Block::Text(format!(
-                "Robot: {} kg, wingspan {} m, mean chord {} m, {} degrees of freedom, {} actuators; simulation {} Hz, policy {} Hz, action filter {} Hz.",
-                fixed(&robot["total_mass_kg"], 3),
-                fixed(&robot["wingspan_m"], 3),
-                fixed(&robot["mean_chord_m"], 3),
-                robot["degrees_of_freedom"],
-                robot["actuators"],
-                fixed(&robot["simulation_hz"], 0),
-                fixed(&robot["control_hz"], 0),
-                fixed(&robot["filter_cutoff_hz"], 1)
-            )),
+            Block::Text(robot),
             Block::Text(
                 "Table II: ellipsoid fluid model coefficients of each lifting surface (read from the model):".into(),
             ),
             Block::Table(
-                ["surface", "blunt drag", "slender drag", "angular drag", "Kutta lift", "Magnus lift"]
-                    .map(String::from)
-                    .to_vec(),
+                header(&["surface", "blunt drag", "slender drag", "angular drag", "Kutta lift", "Magnus lift"]),
                 table_ii,
             ),
-            Block::Text(format!(
-                "Table III: randomization, from {}:",
-                tables["table_iii"]["source"].as_str().unwrap_or("-")
-            )),
-            Block::Table(["parameter", "flapper", "paper"].map(String::from).to_vec(), table_iii),
+            Block::Text(format!("Table III: randomization, from {}:", or_dash(tables, |t| t.table_iii.source.clone()))),
+            Block::Table(header(&["parameter", "flapper", "paper"]), table_iii),
         ],
     }
 }
 
 /// Training: the curriculum's stages and their learning curves.
-fn training(out: &Path) -> Section {
-    let training = json(out, "training/training.json");
+fn training(results: &RunResults) -> Section {
+    let Some(training) = &results.training else {
+        return Section { title: "Training".into(), blocks: vec![Block::Text("Training: not measured.".into())] };
+    };
     let mut training_rows = Vec::new();
     let mut curves = Vec::new();
-    for s in training["stages"].as_array().cloned().unwrap_or_default() {
+    for s in &training.stages {
         training_rows.push(vec![
-            format!("{}", s["stage"]),
-            s["name"].as_str().unwrap_or("").to_owned(),
-            format!("{}", s["iterations"]),
-            scaled(&s["env_steps"], 1.0 / 1e6, 2),
-            scaled(&s["wall_time_s"], 1.0 / 60.0, 1),
-            format!("{}", s["selected_iteration"]),
-            fixed(&s["validation_score"], 1),
+            s.stage.to_string(),
+            s.name.clone(),
+            s.iterations.to_string(),
+            scaled(s.env_steps as f64, 1.0 / 1e6, 2),
+            scaled(s.wall_time_s, 1.0 / 60.0, 1),
+            s.selected_iteration.to_string(),
+            fixed(s.validation_score, 1),
         ]);
-        if let Some(file) = s["learning_curves"].as_str() {
-            curves.push(figure(&format!("Learning curves of stage {}.", s["stage"]), &format!("training/{file}")));
+        if let Some(file) = &s.learning_curves {
+            curves.push(figure(&format!("Learning curves of stage {}.", s.stage), &format!("training/{file}")));
         }
     }
     let mut blocks = vec![Block::Text(format!(
         "The final controller comes from one command, `{}` (seed {}), whose folder is `{}`.",
-        training["command"].as_str().unwrap_or("-"),
-        training["seed"],
-        training["curriculum"].as_str().unwrap_or("-")
+        training.command, training.seed, training.curriculum
     ))];
     blocks.push(Block::Table(
-        [
+        header(&[
             "stage",
             "name",
             "iterations",
@@ -469,16 +462,16 @@ fn training(out: &Path) -> Section {
             "wall time (min)",
             "handed over",
             "its validation completed (%)",
-        ]
-        .map(String::from)
-        .to_vec(),
+        ]),
         training_rows,
     ));
     blocks.push(Block::Text(format!(
-        "In all: {} M steps in {} h ({} steps/s, validation included); the paper: 30 M steps in about 5 h on 8 cores (1.7 k steps/s).",
-        scaled(&training["total_env_steps"], 1.0 / 1e6, 1),
-        scaled(&training["total_wall_time_s"], 1.0 / 3600.0, 2),
-        fixed(&training["steps_per_s"], 0)
+        "In all: {} M steps in {} h ({} steps/s, validation included); the paper: {} ({:.1} k steps/s).",
+        scaled(training.total_env_steps, 1.0 / 1e6, 1),
+        scaled(training.total_wall_time_s, 1.0 / 3600.0, 2),
+        fixed(training.steps_per_s, 0),
+        paper::training_cost(),
+        paper::training_thousand_steps_per_s()
     )));
     blocks.extend(curves);
     Section { title: "Training".into(), blocks }
@@ -601,29 +594,15 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
 /// Writes `index.html` and `report.md` into `out`; returns their paths.
 pub fn write(
     out: &Path,
+    results: &RunResults,
     settings: &ReportSettings,
     rows: &[Row],
     notes: &[String],
     wall_time_s: f64,
 ) -> Result<(PathBuf, PathBuf), ReportError> {
-    let sections = sections(out, settings, rows, notes, wall_time_s);
+    let sections = sections(out, results, settings, rows, notes, wall_time_s);
     let (index, md) = (out.join("index.html"), out.join("report.md"));
     write_file(&index, html(out, &sections).as_bytes())?;
     write_file(&md, markdown(out, &sections).as_bytes())?;
     Ok((index, md))
-}
-
-/// Whether the airspeeds in `needs` (a `needed_airspeed` of robustness.json) lie inside `envelope` (the
-/// `envelope` of another reference's robustness.json: level flight does not depend on the reference).
-fn inside_longitudinal_envelope(needs: &Value, envelope: &Value) -> Option<bool> {
-    use flapper_analysis::robustness::{EnvelopeResult, NeededAirspeed};
-    let envelope = EnvelopeResult {
-        speeds: Vec::new(),
-        slowest_sustained_mps: envelope["slowest_sustained_mps"].as_f64(),
-        fastest_sustained_mps: envelope["fastest_sustained_mps"].as_f64(),
-        fastest_flown_mps: envelope["fastest_flown_mps"].as_f64()?,
-    };
-    let needs =
-        NeededAirspeed { slowest_mps: needs["slowest_mps"].as_f64()?, fastest_mps: needs["fastest_mps"].as_f64()? };
-    needs.inside(&envelope)
 }

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use flapper_report::comparison::Source;
+use flapper_report::results::RunResults;
 use flapper_report::{ReportSettings, generate};
 
 fn repository() -> PathBuf {
@@ -106,5 +107,19 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         rows += 1;
     }
     assert!(rows >= 14, "only {rows} comparisons");
+
+    // Every result file reads back as the type that wrote it (NaN written as null included).
+    let results = RunResults::read(&out);
+    assert_eq!(
+        results.tracking.len(),
+        flapper_report::TRACKED_REFERENCES.len(),
+        "a tracking summary does not read back"
+    );
+    assert_eq!(results.robustness.len(), 2, "a robustness.json does not read back");
+    assert!(
+        results.sysid.is_some() && results.phase.is_some() && results.modes.is_some(),
+        "an analysis does not read back"
+    );
+    assert!(results.tables.is_some() && results.training.is_some(), "the tables do not read back");
     std::fs::remove_dir_all(&out).unwrap();
 }
