@@ -186,7 +186,8 @@ pub fn generate(
     let rows = comparison::compare(&results);
     comparison::write_csv(&rows, &out.join("paper_vs_flapper.csv"))?;
     let wall_time_s = began.elapsed().as_secs_f64();
-    let (index_html, report_md) = page::write(out, &results, settings, &rows, &notes, wall_time_s)?;
+    let page = page::PageInput { out, results: &results, settings, rows: &rows, notes: &notes, wall_time_s };
+    let (index_html, report_md) = page::write(&page)?;
     progress("page");
     Ok(ReportOutcome { index_html, report_md, notes, wall_time_s })
 }

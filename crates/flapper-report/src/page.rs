@@ -41,14 +41,19 @@ fn header(names: &[&str]) -> Vec<String> {
     names.iter().map(|n| (*n).to_owned()).collect()
 }
 
-fn sections(
-    out: &Path,
-    results: &RunResults,
-    settings: &ReportSettings,
-    rows: &[Row],
-    notes: &[String],
-    wall_time_s: f64,
-) -> Vec<Section> {
+/// What the page shows: a report run's folder, its results and settings, the comparison, the notes on
+/// what was left out, and how long the run took.
+pub struct PageInput<'a> {
+    pub out: &'a Path,
+    pub results: &'a RunResults,
+    pub settings: &'a ReportSettings,
+    pub rows: &'a [Row],
+    pub notes: &'a [String],
+    pub wall_time_s: f64,
+}
+
+fn sections(input: &PageInput) -> Vec<Section> {
+    let PageInput { out, results, settings, rows, notes, wall_time_s } = *input;
     vec![
         intro(settings, notes, wall_time_s),
         paper_vs_flapper(rows),
@@ -435,7 +440,8 @@ fn training(results: &RunResults) -> Section {
     };
     let mut training_rows = Vec::new();
     let mut curves = Vec::new();
-    for s in &training.stages {
+    for s in training.stages.iter().map(|s| (&s.outcome, &s.learning_curves)) {
+        let (s, learning_curves) = s;
         training_rows.push(vec![
             s.stage.to_string(),
             s.name.clone(),
@@ -445,7 +451,7 @@ fn training(results: &RunResults) -> Section {
             s.selected_iteration.to_string(),
             fixed(s.validation_score, 1),
         ]);
-        if let Some(file) = &s.learning_curves {
+        if let Some(file) = learning_curves {
             curves.push(figure(&format!("Learning curves of stage {}.", s.stage), &format!("training/{file}")));
         }
     }
@@ -592,15 +598,8 @@ fn markdown(out: &Path, sections: &[Section]) -> String {
 }
 
 /// Writes `index.html` and `report.md` into `out`; returns their paths.
-pub fn write(
-    out: &Path,
-    results: &RunResults,
-    settings: &ReportSettings,
-    rows: &[Row],
-    notes: &[String],
-    wall_time_s: f64,
-) -> Result<(PathBuf, PathBuf), ReportError> {
-    let sections = sections(out, results, settings, rows, notes, wall_time_s);
+pub fn write(input: &PageInput) -> Result<(PathBuf, PathBuf), ReportError> {
+    let (out, sections) = (input.out, sections(input));
     let (index, md) = (out.join("index.html"), out.join("report.md"));
     write_file(&index, html(out, &sections).as_bytes())?;
     write_file(&md, markdown(out, &sections).as_bytes())?;

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use flapper_curriculum::selection::StageOutcome;
 use flapper_sim::{FluidCoefficients, LIFTING_SURFACE_GEOMS, RobotModel};
 use flapper_task::TaskConfig;
 use flapper_task::config::RandomizationConfig;
@@ -24,16 +25,12 @@ pub struct TrainingTable {
     pub steps_per_s: f64,
 }
 
-/// One stage of [`TrainingTable`].
+/// One stage of [`TrainingTable`]: its outcome as the curriculum's `summary.json` records it, and its
+/// learning curves.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainedStage {
-    pub stage: usize,
-    pub name: String,
-    pub iterations: usize,
-    pub env_steps: u64,
-    pub wall_time_s: f64,
-    pub selected_iteration: usize,
-    pub validation_score: f64,
+    #[serde(flatten)]
+    pub outcome: StageOutcome,
     /// The stage's learning curves copied beside `training.json` (None when the run had none).
     pub learning_curves: Option<String>,
 }
@@ -56,16 +53,7 @@ pub fn training(curriculum: &Path, dir: &Path) -> Result<(), ReportError> {
             }
             Err(_) => None,
         };
-        stages.push(TrainedStage {
-            stage: stage.stage,
-            name: stage.name.clone(),
-            iterations: stage.iterations,
-            env_steps: stage.env_steps,
-            wall_time_s: stage.wall_time_s,
-            selected_iteration: stage.selected_iteration,
-            validation_score: stage.validation_score,
-            learning_curves,
-        });
+        stages.push(TrainedStage { outcome: stage.clone(), learning_curves });
     }
     let (steps, time) = (summary.total_env_steps as f64, summary.total_wall_time_s);
     let training = TrainingTable {
