@@ -115,6 +115,14 @@ pub fn flight_modes(
     let json = dir.join("modes.json");
     flapper_files::write_json(&json, &report).map_err(|e| fail(&json, &e))?;
     let svg = dir.join("modes.svg");
+    draw_modes(&svg, &flight.steps, &held, &report).map_err(|e| fail(&svg, &e))?;
+    Ok((report, vec![json, svg]))
+}
+
+/// `modes.svg`: the flap angle, the power, the held wings and the energy per metre over the flight,
+/// with the segments' boundaries.
+fn draw_modes(svg: &Path, steps: &[TrackingStep], held: &[bool], report: &ModesReport) -> Result<(), String> {
+    let flap = ActuatedJoint::FlapLeft.index();
     let boundaries = |lo: f64, hi: f64| -> Vec<Curve> {
         SEGMENTS[1..]
             .iter()
@@ -127,8 +135,8 @@ pub fn flight_modes(
             .collect()
     };
     let flap_points: Vec<(f64, f64)> =
-        flight.steps.iter().map(|s| (s.time_s, s.joint_positions_rad[flap].to_degrees())).collect();
-    let power_points: Vec<(f64, f64)> = flight.steps.iter().map(|s| (s.time_s, s.absolute_power_w)).collect();
+        steps.iter().map(|s| (s.time_s, s.joint_positions_rad[flap].to_degrees())).collect();
+    let power_points: Vec<(f64, f64)> = steps.iter().map(|s| (s.time_s, s.absolute_power_w)).collect();
     let max_power = power_points.iter().map(|p| p.1).fold(0.0, f64::max);
     let mut flap_curves =
         vec![Curve { label: "flap_left".into(), points: flap_points, color: COLORS[0], dashed: false }];
@@ -141,7 +149,7 @@ pub fn flight_modes(
     }];
     power_curves.extend(boundaries(0.0, max_power));
     let held_points: Vec<(f64, f64)> =
-        flight.steps.iter().zip(&held).map(|(s, &h)| (s.time_s, if h { 1.0 } else { 0.0 })).collect();
+        steps.iter().zip(held).map(|(s, &h)| (s.time_s, if h { 1.0 } else { 0.0 })).collect();
     let per_segment = |value: &dyn Fn(&SegmentFigures) -> f64| -> Vec<(f64, f64)> {
         report.segments.iter().flat_map(|s| [(s.start_s, value(s)), (s.end_s, value(s))]).collect()
     };
@@ -196,8 +204,7 @@ pub fn flight_modes(
             equal_aspect: false,
         },
     ];
-    flapper_plot::draw(&svg, (1200, 1400), &panels, (4, 1)).map_err(|e| fail(&svg, &e))?;
-    Ok((report, vec![json, svg]))
+    flapper_plot::draw(svg, (1200, 1400), &panels, (4, 1))
 }
 
 /// One segment's figures from the steps inside it (after the launch transient).
