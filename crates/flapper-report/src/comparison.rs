@@ -27,6 +27,17 @@ pub enum Format {
     Text,
 }
 
+impl Format {
+    /// `x` printed in this format; `None` for the formats that are not numbers.
+    fn number(self, x: f64) -> Option<String> {
+        match self {
+            Format::Fixed(d) => Some(format!("{x:.d$}")),
+            Format::Scientific(d) => Some(format!("{x:.d$e}")),
+            Format::YesNo | Format::Text => None,
+        }
+    }
+}
+
 /// One number of a row: `file` (relative to the report folder), a JSON pointer into it, a scale
 /// applied before formatting, and the format.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,8 +59,7 @@ impl Source {
         let json: Value = serde_json::from_str(&text).ok()?;
         let value = json.pointer(&self.pointer)?;
         Some(match self.format {
-            Format::Fixed(d) => format!("{:.*}", d, value.as_f64()? * self.scale),
-            Format::Scientific(d) => format!("{:.*e}", d, value.as_f64()? * self.scale),
+            Format::Fixed(_) | Format::Scientific(_) => self.format.number(value.as_f64()? * self.scale)?,
             Format::YesNo => {
                 if value.as_bool()? {
                     "yes".into()
@@ -114,11 +124,7 @@ struct Figure {
 
 impl Figure {
     fn number(file: &str, pointer: &str, value: Option<f64>, scale: f64, format: Format) -> Self {
-        let value = value.filter(|v| v.is_finite()).map(|v| match format {
-            Format::Scientific(d) => format!("{:.*e}", d, v * scale),
-            Format::Fixed(d) => format!("{:.*}", d, v * scale),
-            Format::YesNo | Format::Text => unreachable!("a number is printed fixed or scientific"),
-        });
+        let value = value.filter(|v| v.is_finite()).and_then(|v| format.number(v * scale));
         Self { source: Source::new(file, pointer, scale, format), value }
     }
 
