@@ -170,16 +170,20 @@ pub fn compare(results: &RunResults) -> Vec<Row> {
 /// The learned gait: flapping frequency and the energy in its fundamental.
 fn gait(table: &mut Table) {
     let (file, cruise) = (files::tracking("cruise"), table.results.tracking("cruise"));
+    // Flap, wing pitch and tail: one figure each of the cruise summary's `key`.
+    let per_joint = |key: &str, of: fn(&TrackingSummary) -> [f64; 3], scale: f64, decimals: usize| -> Vec<Figure> {
+        (0..3)
+            .map(|k| {
+                let value = cruise.map(|s| of(s)[k]);
+                Figure::number(&file, &format!("/summary/{key}/{k}"), value, scale, Format::Fixed(decimals))
+            })
+            .collect()
+    };
     let paper_hz = paper::FLAP_FREQUENCY_HZ;
     table.row(
         "learned flapping frequency (cruise at 3.8 m/s)",
         &format!("{paper_hz} Hz"),
-        (0..3)
-            .map(|k| {
-                let value = cruise.map(|s| s.frequency_hz[k]);
-                Figure::number(&file, &format!("/summary/frequency_hz/{k}"), value, 1.0, Format::Fixed(2))
-            })
-            .collect(),
+        per_joint("frequency_hz", |s| s.frequency_hz, 1.0, 2),
         &|v| {
             let flap: f64 = v[0].parse().unwrap_or(f64::NAN);
             let off = 100.0 * (flap / paper_hz - 1.0);
@@ -197,12 +201,7 @@ fn gait(table: &mut Table) {
     table.row(
         "energy in the fundamental frequency",
         &format!("{lowest}-{highest}% (flap, wing pitch, tail)"),
-        (0..3)
-            .map(|k| {
-                let value = cruise.map(|s| s.energy_fraction[k]);
-                Figure::number(&file, &format!("/summary/energy_fraction/{k}"), value, 100.0, Format::Fixed(1))
-            })
-            .collect(),
+        per_joint("energy_fraction", |s| s.energy_fraction, 100.0, 1),
         &|v| {
             let within = v.iter().all(|x| x.parse::<f64>().is_ok_and(|p| (30.0..=45.0).contains(&p)));
             (
