@@ -163,10 +163,8 @@ fn run_stage(
     let here = stage_dir(dir, number);
     let outcome_path = here.join("selected.json");
     if outcome_path.exists() {
-        let text = std::fs::read_to_string(&outcome_path)
-            .map_err(|e| CurriculumError::File { path: outcome_path.clone(), message: e.to_string() })?;
-        return serde_json::from_str(&text)
-            .map_err(|e| CurriculumError::File { path: outcome_path.clone(), message: e.to_string() });
+        return flapper_files::read_json(&outcome_path)
+            .map_err(|message| CurriculumError::File { path: outcome_path.clone(), message });
     }
     let stage = &config.stages[number - 1];
     let train_config = config.stage_train_config(number).map_err(RunError::from)?;

@@ -38,8 +38,6 @@ impl Summary {
     /// A curriculum folder's `summary.json` (`dir/summary.json`).
     pub fn read(dir: &Path) -> Result<Self, CurriculumError> {
         let path = dir.join("summary.json");
-        let file = |message: String| CurriculumError::File { path: path.clone(), message };
-        let text = std::fs::read_to_string(&path).map_err(|e| file(e.to_string()))?;
-        serde_json::from_str(&text).map_err(|e| file(e.to_string()))
+        flapper_files::read_json(&path).map_err(|message| CurriculumError::File { path: path.clone(), message })
     }
 }

@@ -87,10 +87,11 @@ pub mod decimals {
     }
 }
 
-/// Reads back a JSON file that [`write_json`] wrote, as the type that wrote it.
+/// Reads back a JSON file that [`write_json`] wrote, as the type that wrote it; the error says what went
+/// wrong (the caller names the file).
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    serde_json::from_str(&text).map_err(|e| e.to_string())
 }
 
 /// `deserialize_with` helpers for numbers that may be NaN. JSON has no NaN: serde_json writes NaN (and

@@ -92,7 +92,7 @@ const REPORT_PARTS: [&str; 8] = ["tracking", "sysid", "phase", "modes", "robustn
 
 /// How many times [`generate`] calls its progress callback (for a progress bar).
 pub fn step_count(settings: &ReportSettings) -> usize {
-    TRACKED_REFERENCES.len() + 3 + 2 + if settings.pictures { 2 } else { 0 } + 1
+    TRACKED_REFERENCES.len() + 3 + results::ROBUSTNESS_REFERENCES.len() + if settings.pictures { 2 } else { 0 } + 1
 }
 
 /// Runs everything and writes the report into `out` (which must exist). `progress` is called after
@@ -146,7 +146,9 @@ pub fn generate(
     progress("phase portraits");
     experiments::modes(robot, policy.clone(), &task, &out.join("modes"))?;
     progress("flight modes");
-    for (name, envelope) in [("longitudinal", true), ("lateral", false)] {
+    // The level-flight envelope does not depend on the reference: the first one measures it for all.
+    for (k, name) in results::ROBUSTNESS_REFERENCES.into_iter().enumerate() {
+        let envelope = k == 0;
         experiments::robustness(
             robot,
             &controller,
