@@ -62,8 +62,16 @@ impl Normalizer {
     pub fn normalize(&self, rows: &[f32], out: &mut Vec<f32>) {
         let size = self.size();
         out.resize(rows.len(), 0.0);
-        let scale: Vec<f32> = self.variance.iter().map(|v| (1.0 / (v.sqrt() + EPSILON)) as f32).collect();
-        let mean: Vec<f32> = self.mean.iter().map(|&m| m as f32).collect();
+        let feature = |i: usize| (self.mean[i] as f32, (1.0 / (self.variance[i].sqrt() + EPSILON)) as f32);
+        if rows.len() == size {
+            // One observation (the on-board controller's call): no buffers to allocate.
+            for (i, (dst, &x)) in out.iter_mut().zip(rows).enumerate() {
+                let (mean, scale) = feature(i);
+                *dst = ((x - mean) * scale).clamp(-CLIP, CLIP);
+            }
+            return;
+        }
+        let (mean, scale): (Vec<f32>, Vec<f32>) = (0..size).map(feature).unzip();
         for (row, dst) in rows.chunks_exact(size).zip(out.chunks_exact_mut(size)) {
             for i in 0..size {
                 dst[i] = ((row[i] - mean[i]) * scale[i]).clamp(-CLIP, CLIP);
@@ -109,5 +117,21 @@ mod tests {
         assert!(out.iter().skip(1).step_by(2).all(|&x| x == 0.0), "a constant feature maps to 0");
         n.normalize(&[0.0, 1e6], &mut out);
         assert_eq!(out[1], CLIP);
+    }
+
+    #[test]
+    fn one_row_alone_normalizes_to_the_same_bits_as_in_a_batch() {
+        let data: Vec<f32> = (0..300).map(|i| ((i * 7919) % 101) as f32 * 0.37 - 11.0).collect();
+        let mut n = Normalizer::new(3);
+        n.update(&data);
+        let (mut batch, mut single) = (Vec::new(), Vec::new());
+        n.normalize(&data, &mut batch);
+        for (row, expected) in data.chunks_exact(3).zip(batch.chunks_exact(3)) {
+            n.normalize(row, &mut single);
+            assert_eq!(
+                single.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                expected.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
     }
 }
