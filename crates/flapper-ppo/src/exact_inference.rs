@@ -63,7 +63,7 @@ fn dot_block<const J: usize>(x: &[f32], ws: [&[f32]; J]) -> [f32; J] {
     for (c, xc) in x[..whole].chunks_exact(LANES).enumerate() {
         let xc = f32x8::from(lanes(xc));
         for (p, w) in partial.iter_mut().zip(&ws) {
-            *p = *p + xc * f32x8::from(lanes(&w[c * LANES..(c + 1) * LANES]));
+            *p += xc * f32x8::from(lanes(&w[c * LANES..(c + 1) * LANES]));
         }
     }
     let mut partial = partial.map(|p| p.to_array());
