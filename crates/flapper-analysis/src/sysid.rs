@@ -327,11 +327,19 @@ pub struct OrderFit {
     pub minimum_phase: bool,
 }
 
-/// Per axis, the validation of each model order tried, and the order that validated best.
+/// Per axis, the validation of each model order tried, the order that validated best, and the
+/// validation fit of the measured frequency response itself.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct OrderSelection {
     pub orders: Vec<OrderFit>,
     pub best_poles: usize,
+    /// What a linear model of any order, fitted to these identification records, can be expected to
+    /// reach: the validation fit (%) of the identification records' measured response at the
+    /// harmonics ([`nonparametric_fit_percent`]). A parametric fit well below it is the model's
+    /// fault; this itself well below 100% means the closed loop answers different multisines
+    /// differently (it is not linear at this amplitude), which no model order fixes.
+    #[serde(deserialize_with = "flapper_files::nan_as_null::number")]
+    pub nonparametric_fit_percent: f64,
 }
 
 /// Orders tried by the order selection (poles; the headline model keeps the paper's 3).
@@ -414,7 +422,11 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<Identified
             })
             .collect();
         let best_poles = orders.iter().max_by(|a, b| a.fit_percent.total_cmp(&b.fit_percent)).map_or(3, |o| o.poles);
-        OrderSelection { orders, best_poles }
+        OrderSelection {
+            orders,
+            best_poles,
+            nonparametric_fit_percent: nonparametric_fit_percent(records, a, leads[a], s),
+        }
     });
     let report = SysidReport {
         method:
@@ -430,6 +442,42 @@ pub fn identify(records: &[FlownRecord], s: &SysidSettings) -> Result<Identified
     Ok(Identified { report, models, leads })
 }
 
+/// The discrete Fourier coefficient of `signal` (one period) at harmonic `k`.
+fn harmonic_coefficient(signal: &[f64], k: usize) -> num_complex::Complex64 {
+    let period = signal.len() as f64;
+    signal
+        .iter()
+        .enumerate()
+        .map(|(n, v)| v * num_complex::Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * n) as f64 / period))
+        .sum()
+}
+
+/// One averaged period of each of `records`' input and output (the first after the left-out one),
+/// at `lead`; records too short for a period are left out.
+fn one_period<'a>(records: impl Iterator<Item = &'a FlownRecord>, lead: usize, s: &SysidSettings) -> Vec<Record> {
+    let period = (s.period_s / CONTROL_PERIOD_S).round() as usize;
+    let skip = (s.skip_s() / CONTROL_PERIOD_S).round() as usize;
+    records
+        .map(|r| r.record(lead))
+        .filter(|r| r.input.len() >= skip + period)
+        .map(|r| Record {
+            input: r.input[skip..skip + period].to_vec(),
+            output: r.output[skip..skip + period].to_vec(),
+        })
+        .collect()
+}
+
+/// Output over input at each harmonic of `s`, averaged over `periods`.
+fn mean_response(periods: &[Record], s: &SysidSettings) -> Vec<num_complex::Complex64> {
+    s.harmonics()
+        .into_iter()
+        .map(|k| {
+            let ratios = periods.iter().map(|p| harmonic_coefficient(&p.output, k) / harmonic_coefficient(&p.input, k));
+            ratios.sum::<num_complex::Complex64>() / periods.len().max(1) as f64
+        })
+        .collect()
+}
+
 /// The measured frequency response of one axis at the multisine's harmonics: per record, the
 /// discrete Fourier coefficients of one averaged period of output and input, their ratio averaged
 /// over the axis's records. Entries are (frequency in Hz, gain as a complex number).
@@ -439,28 +487,47 @@ pub fn measured_response(
     lead: usize,
     s: &SysidSettings,
 ) -> Vec<(f64, num_complex::Complex64)> {
-    use num_complex::Complex64;
-    let period = (s.period_s / CONTROL_PERIOD_S).round() as usize;
-    let skip = (s.skip_s() / CONTROL_PERIOD_S).round() as usize;
-    let mine: Vec<Record> = records.iter().filter(|r| r.axis == axis).map(|r| r.record(lead)).collect();
-    let coefficient = |signal: &[f64], k: usize| -> Complex64 {
-        signal
-            .iter()
-            .enumerate()
-            .map(|(n, v)| v * Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * n) as f64 / period as f64))
-            .sum()
-    };
-    s.harmonics()
-        .into_iter()
-        .map(|k| {
-            let ratios: Vec<Complex64> = mine
-                .iter()
-                .filter(|r| r.input.len() >= skip + period)
-                .map(|r| coefficient(&r.output[skip..skip + period], k) / coefficient(&r.input[skip..skip + period], k))
-                .collect();
-            (k as f64 * (1.0 / s.period_s), ratios.iter().sum::<Complex64>() / ratios.len().max(1) as f64)
+    let periods = one_period(records.iter().filter(|r| r.axis == axis), lead, s);
+    s.harmonics().into_iter().map(|k| k as f64 * (1.0 / s.period_s)).zip(mean_response(&periods, s)).collect()
+}
+
+/// The validation fit (%, as [`crate::fit::validate`]'s) of the measured response itself: the
+/// identification records' mean output/input ratio at each harmonic, applied to each validation
+/// record's input over one period, against its output over that period (mean over the validation
+/// records). A linear time-invariant system gives nearly 100% (less what noise is left after the
+/// averaging); a closed loop whose answer to a multisine depends on the multisine's phases (a
+/// nonlinear one) gives less, and no linear model fitted to the same records does much better.
+pub fn nonparametric_fit_percent(records: &[FlownRecord], axis: usize, lead: usize, s: &SysidSettings) -> f64 {
+    let of = |set: DataSet| one_period(records.iter().filter(|r| r.axis == axis && r.set == set), lead, s);
+    let (identification, validation) = (of(DataSet::Identification), of(DataSet::Validation));
+    if identification.is_empty() || validation.is_empty() {
+        return f64::NAN;
+    }
+    let response = mean_response(&identification, s);
+    let fits: Vec<f64> = validation
+        .iter()
+        .map(|v| {
+            let period = v.output.len();
+            let input: Vec<num_complex::Complex64> =
+                s.harmonics().into_iter().map(|k| harmonic_coefficient(&v.input, k)).collect();
+            // The predicted period: the real signal whose coefficient at harmonic k is H_k U_k.
+            let predicted = (0..period).map(|n| {
+                s.harmonics()
+                    .into_iter()
+                    .zip(input.iter().zip(&response))
+                    .map(|(k, (u, h))| {
+                        let turn = std::f64::consts::TAU * (k * n) as f64 / period as f64;
+                        2.0 / period as f64 * (h * u * num_complex::Complex64::from_polar(1.0, turn)).re
+                    })
+                    .sum::<f64>()
+            });
+            let mean = v.output.iter().sum::<f64>() / period as f64;
+            let error: f64 = v.output.iter().zip(predicted).map(|(y, p)| (y - mean - p).powi(2)).sum();
+            let spread: f64 = v.output.iter().map(|y| (y - mean).powi(2)).sum();
+            100.0 * (1.0 - (error / spread).sqrt())
         })
-        .collect()
+        .collect();
+    fits.iter().sum::<f64>() / fits.len() as f64
 }
 
 /// Magnitude (dB) and phase (degrees) of `gains`, the phase unwrapped along the frequencies, or, with

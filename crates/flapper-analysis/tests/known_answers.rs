@@ -137,3 +137,36 @@ fn an_anticipating_closed_loop_is_recovered_with_its_lead_poles_and_zeros() {
         assert!(m.fit_percent < with - 1.0, "{axis}: {} without the lead, {with} with it", m.fit_percent);
     }
 }
+
+#[test]
+fn the_measured_responses_own_fit_is_near_100_percent_for_a_linear_loop_and_not_for_a_saturating_one() {
+    let den = PAPER_DENOMINATOR.to_vec();
+    let truths = [
+        (TransferFunction::new(vec![49.89, 164.9, 26.27], den.clone()).unwrap(), 15),
+        (TransferFunction::new(vec![0.3, 2.1, 3.0], den.clone()).unwrap(), 5),
+        (TransferFunction::new(vec![1.006, 1.020, 3.836], den).unwrap(), 25),
+    ];
+    let s = SysidSettings { averaged_periods: 3, ..SysidSettings::default() };
+    let linear = anticipating_records(&truths, &s, 1e-3);
+    let identified = identify(&linear, &s).unwrap();
+    for (axis, selection) in identified.report.order_selection.iter().enumerate() {
+        let model_fit = identified.report.per_axis.each()[axis].1.fit_percent;
+        assert!(selection.nonparametric_fit_percent > 97.0, "axis {axis}: {}", selection.nonparametric_fit_percent);
+        assert!((selection.nonparametric_fit_percent - model_fit).abs() < 3.0, "axis {axis}: model {model_fit}");
+    }
+    // The same loops with their output clipped at half its RMS: each multisine is distorted its own way.
+    let saturating: Vec<FlownRecord> = linear
+        .into_iter()
+        .map(|mut r| {
+            let rms = (r.output.iter().map(|y| y * y).sum::<f64>() / r.output.len() as f64).sqrt();
+            r.output.iter_mut().for_each(|y| *y = y.clamp(-0.5 * rms, 0.5 * rms));
+            r
+        })
+        .collect();
+    let clipped = identify(&saturating, &s).unwrap();
+    for (axis, selection) in clipped.report.order_selection.iter().enumerate() {
+        let best_model = selection.orders.iter().map(|o| o.fit_percent).fold(f64::NEG_INFINITY, f64::max);
+        assert!(selection.nonparametric_fit_percent < 90.0, "axis {axis}: {}", selection.nonparametric_fit_percent);
+        assert!(best_model < selection.nonparametric_fit_percent + 5.0, "axis {axis}: best model {best_model}");
+    }
+}

@@ -86,6 +86,17 @@ pub fn sysid_command(robot: &RobotModel, policy_path: &Path, args: &SysidArgs) -
     for (axis, m) in report.common_denominator.each() {
         println!("  {axis}: poles {}; zeros {}; {}", roots(&m.poles), roots(&m.zeros), verdicts(m));
     }
+    let [x, y, z] = &report.order_selection;
+    println!(
+        "the measured response's own validation fit (what a linear model of any order can be expected to reach): x \
+         {:.1}%, y {:.1}%, z {:.1}%; best order by validation: x {}, y {}, z {} poles",
+        x.nonparametric_fit_percent,
+        y.nonparametric_fit_percent,
+        z.nonparametric_fit_percent,
+        x.best_poles,
+        y.best_poles,
+        z.best_poles
+    );
     for path in written {
         println!("wrote {}", path.display());
     }
