@@ -51,9 +51,17 @@ impl RunFolder {
     }
 
     /// Takes over an existing run to continue it: the folder, locked, and its newest checkpoint.
+    /// A folder another trainer still holds is busy, also before its first checkpoint.
     pub fn open(dir: &Path) -> Result<(Self, PathBuf), TrainError> {
+        // The lock first where the folder has one (a run's folder), so that a run still before its first
+        // checkpoint is reported as busy, not as empty; no lock file is made in a folder that is no run.
+        let early_lock = if dir.join(".lock").is_file() { Some(lock(dir)?) } else { None };
         let newest = latest_checkpoint(dir).ok_or_else(|| TrainError::NothingToResume(dir.to_owned()))?;
-        Ok((Self { dir: dir.to_owned(), _lock: lock(dir)? }, newest))
+        let lock = match early_lock {
+            Some(file) => file,
+            None => lock(dir)?,
+        };
+        Ok((Self { dir: dir.to_owned(), _lock: lock }, newest))
     }
 
     pub fn dir(&self) -> &Path {
@@ -149,10 +157,17 @@ mod tests {
         let run = dir.join("run");
         let folder = RunFolder::create(&run, "seed = 3\n").unwrap();
         assert_eq!(std::fs::read_to_string(run.join("config.toml")).unwrap(), "seed = 3\n");
-        assert!(matches!(RunFolder::open(&run).unwrap_err(), TrainError::NothingToResume(_)));
+        let early = RunFolder::open(&run).unwrap_err();
+        assert!(matches!(early, TrainError::Busy(_)), "busy before the first checkpoint too: {early}");
         std::fs::write(folder.checkpoint(5), "").unwrap();
         assert!(matches!(RunFolder::open(&run).unwrap_err(), TrainError::Busy(_)), "the first owner holds the lock");
         drop(folder);
+        let empty = dir.join("empty");
+        RunFolder::create(&empty, "").map(drop).unwrap();
+        assert!(matches!(RunFolder::open(&empty).unwrap_err(), TrainError::NothingToResume(_)));
+        let not_a_run = scratch("not-a-run");
+        assert!(matches!(RunFolder::open(&not_a_run).unwrap_err(), TrainError::NothingToResume(_)));
+        assert!(!not_a_run.join(".lock").exists(), "no lock file left in a folder that is no run");
         assert!(matches!(RunFolder::create(&run, "").unwrap_err(), TrainError::RunExists(_)));
         let (_, newest) = RunFolder::open(&run).unwrap();
         assert_eq!(newest, checkpoint_path(&run, 5));
