@@ -55,12 +55,9 @@ impl RunFolder {
     pub fn open(dir: &Path) -> Result<(Self, PathBuf), TrainError> {
         // The lock first where the folder has one (a run's folder), so that a run still before its first
         // checkpoint is reported as busy, not as empty; no lock file is made in a folder that is no run.
-        let early_lock = if dir.join(".lock").is_file() { Some(lock(dir)?) } else { None };
+        let early_lock = dir.join(".lock").is_file().then(|| lock(dir)).transpose()?;
         let newest = latest_checkpoint(dir).ok_or_else(|| TrainError::NothingToResume(dir.to_owned()))?;
-        let lock = match early_lock {
-            Some(file) => file,
-            None => lock(dir)?,
-        };
+        let lock = early_lock.map_or_else(|| lock(dir), Ok)?;
         Ok((Self { dir: dir.to_owned(), _lock: lock }, newest))
     }
 
