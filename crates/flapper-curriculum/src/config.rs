@@ -5,6 +5,7 @@
 
 use std::path::Path;
 
+use flapper_task::config::RandomizationConfig;
 use flapper_train::{TrainConfig, TrainConfigError};
 use serde::{Deserialize, Serialize};
 
@@ -76,6 +77,33 @@ pub struct ValidationConfig {
     pub procedural: usize,
     /// Randomized starts per reference.
     pub episodes: usize,
+    /// References flown again with the robot's dynamics and the wind drawn per episode, so that
+    /// selection sees robustness too (the nominal flights cannot).
+    #[serde(default)]
+    pub randomized: Vec<RandomizedValidation>,
+}
+
+/// Some references flown under one randomization: each becomes a validation entry named
+/// `<reference>~<name>` (for example `lateral~table3`) with its own completion and RMS error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RandomizedValidation {
+    /// A short name for the setting (letters, digits, '-', '_', '.').
+    pub name: String,
+    pub references: Vec<String>,
+    /// Episodes per reference, each with its own draw of the dynamics and its own start.
+    pub episodes: usize,
+    /// A `[task.randomization]` table, always on (`enabled` is implied): Table III's ranges where
+    /// not given; an interval of [1, 1] or a zero switches an item off.
+    #[serde(default)]
+    pub randomization: RandomizationConfig,
+}
+
+impl RandomizedValidation {
+    /// The randomization as flown (switched on).
+    pub fn flown_randomization(&self) -> RandomizationConfig {
+        RandomizationConfig { enabled: true, ..self.randomization.clone() }
+    }
 }
 
 /// When a stage has done its job: checked at every validation from `min_iterations` on.
@@ -91,6 +119,8 @@ pub struct Gate {
     pub procedural_completed_percent: Option<f64>,
     /// The mean RMS tracking error over all validation episodes at most this (m).
     pub max_rms_m: Option<f64>,
+    /// The bar of each randomized validation entry (percent), when it differs from `completed_percent`.
+    pub randomized_completed_percent: Option<f64>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
     #[serde(default)]
     pub min_iterations: usize,
@@ -128,12 +158,13 @@ impl CurriculumConfig {
             let percent = |p: f64| (0.0..=100.0).contains(&p);
             if !percent(g.completed_percent)
                 || !g.procedural_completed_percent.is_none_or(percent)
+                || !g.randomized_completed_percent.is_none_or(percent)
                 || g.max_rms_m.is_some_and(|r| !(r > 0.0 && r.is_finite()))
             {
                 return Err(bad(format!(
-                    "gate.completed_percent and gate.procedural_completed_percent must be in [0, 100] (got {} and \
-                     {:?}) and gate.max_rms_m positive (got {:?})",
-                    g.completed_percent, g.procedural_completed_percent, g.max_rms_m
+                    "gate.completed_percent, gate.procedural_completed_percent and gate.randomized_completed_percent \
+                     must be in [0, 100] (got {}, {:?} and {:?}) and gate.max_rms_m positive (got {:?})",
+                    g.completed_percent, g.procedural_completed_percent, g.randomized_completed_percent, g.max_rms_m
                 )));
             }
             if let Some(std) = stage.start_noise_std
@@ -141,11 +172,25 @@ impl CurriculumConfig {
             {
                 return Err(bad(format!("start_noise_std must be in (0, 10], got {std}")));
             }
-            config.stage_train_config(number).map_err(|source| CurriculumConfigError::Stage {
+            let train = config.stage_train_config(number).map_err(|source| CurriculumConfigError::Stage {
                 origin: origin.to_owned(),
                 stage: number,
                 source,
             })?;
+            for r in &v.randomized {
+                let named = !r.name.is_empty()
+                    && r.name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+                if !named || r.references.is_empty() || r.episodes == 0 {
+                    return Err(bad(format!(
+                        "validation.randomized '{}' needs a name of letters, digits, '-', '_' or '.', at least one \
+                         reference and episodes > 0",
+                        r.name
+                    )));
+                }
+                let mut task = train.task.clone();
+                task.randomization = r.flown_randomization();
+                task.validate().map_err(|e| bad(format!("validation.randomized '{}': {e}", r.name)))?;
+            }
         }
         Ok(config)
     }
@@ -272,5 +317,32 @@ task = { stage = 2 }
         assert!(e.contains("ppo.steps_per_env"), "{e}");
         let e = err("seed = 3", "seed = 3\nstagez = 1");
         assert!(e.contains("stagez"), "{e}");
+        let randomized = |setting: &str| {
+            format!(
+                "validation = {{ references = [\"cruise\"], episodes = 1, randomized = [{setting}] }}\ngate = {{ completed_percent = 0 }}\ntask = {{ stage = 1 }}"
+            )
+        };
+        let first = "validation = { references = [\"cruise\"], episodes = 1 }\ngate = { completed_percent = 0 }\ntask = { stage = 1 }";
+        let good = randomized(
+            r#"{ name = "fluid", references = ["lateral"], episodes = 2, randomization = { fluid_coefficient_scale = [0.7, 1.3] } }"#,
+        );
+        let c = CurriculumConfig::from_toml(&TINY.replacen(first, &good, 1), "ok.toml").unwrap();
+        let setting = &c.stages[0].validation.randomized[0];
+        assert!(setting.flown_randomization().enabled, "a randomized validation is always randomized");
+        assert_eq!(setting.flown_randomization().fluid_coefficient_scale, [0.7, 1.3]);
+        assert_eq!(CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap(), c);
+        let e = err(
+            first,
+            &randomized(
+                r#"{ name = "fluid", references = ["lateral"], episodes = 2, randomization = { fluid_coefficient_scale = [1.3, 0.7] } }"#,
+            ),
+        );
+        assert!(e.contains("stage 1") && e.contains("'fluid'") && e.contains("fluid_coefficient_scale"), "{e}");
+        let e = err(first, &randomized(r#"{ name = "a b", references = ["lateral"], episodes = 2 }"#));
+        assert!(e.contains("'a b'") && e.contains("name"), "{e}");
+        let e = err(first, &randomized(r#"{ name = "t3", references = [], episodes = 2 }"#));
+        assert!(e.contains("'t3'") && e.contains("reference"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, randomized_completed_percent = 101 }");
+        assert!(e.contains("randomized_completed_percent") && e.contains("101"), "{e}");
     }
 }

@@ -296,6 +296,9 @@ pub fn describe_gate(gate: &crate::config::Gate) -> String {
             gate.completed_percent
         ),
     };
+    if let Some(randomized) = gate.randomized_completed_percent {
+        text.push_str(&format!(", each randomized one in at least {randomized}%"));
+    }
     if let Some(rms) = gate.max_rms_m {
         text.push_str(&format!(", mean RMS error at most {rms} m"));
     }

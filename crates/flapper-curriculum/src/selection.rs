@@ -183,6 +183,7 @@ mod tests {
         let gate = Gate {
             completed_percent: 100.0,
             procedural_completed_percent: None,
+            randomized_completed_percent: None,
             max_rms_m: Some(0.35),
             min_iterations: 0,
         };

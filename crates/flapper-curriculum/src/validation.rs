@@ -1,15 +1,17 @@
 //! Judging a checkpoint: fly a stage's validation set (named or CSV references and procedural ones,
-//! from randomized starts drawn with the validation seed) with the policy's mean action, and score it:
-//! completion first, then RMS error. Flights use the CPU-independent inference path, so a checkpoint's
+//! from randomized starts drawn with the validation seed, and optionally some of them again under a
+//! randomization of the dynamics and the wind) with the policy's mean action, and score it: completion
+//! first, then RMS error. Flights use the CPU-independent inference path, so a checkpoint's
 //! score is the same on every machine and when it is judged again after an interruption.
 
 use std::path::Path;
 use std::sync::Arc;
 
-use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized};
 use flapper_eval::{PolicyFileError, load_flight_policy};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::TaskConfig;
+use flapper_task::config::RandomizationConfig;
 use flapper_task::reference::generator::procedural;
 use flapper_task::reference::{Reference, ReferenceError, resolve};
 use rand::SeedableRng;
@@ -31,10 +33,20 @@ pub enum ValidationError {
 /// How the drawn references of a validation set are named: `procedural-1`, `procedural-2`, ...
 pub const PROCEDURAL_PREFIX: &str = "procedural-";
 
+/// Between a reference's name and its randomization's in a randomized entry: `lateral~table3`.
+pub const RANDOMIZED_SEPARATOR: char = '~';
+
+/// One line of a validation set: a reference, flown from `episodes` starts, nominal or randomized.
+pub struct ValidationEntry {
+    pub name: String,
+    pub reference: Arc<Reference>,
+    pub episodes: usize,
+    pub randomization: Option<RandomizationConfig>,
+}
+
 /// The references of a validation set, built once per stage.
 pub struct ValidationSet {
-    pub references: Vec<Arc<Reference>>,
-    pub episodes: usize,
+    pub entries: Vec<ValidationEntry>,
     pub seed: u64,
 }
 
@@ -52,6 +64,18 @@ impl ValidationSet {
         for name in &config.references {
             references.push(Arc::new(resolve(name, dt_s, lookahead)?));
         }
+        let mut randomized = Vec::new();
+        for setting in &config.randomized {
+            for name in &setting.references {
+                let reference = Arc::new(resolve(name, dt_s, lookahead)?);
+                randomized.push(ValidationEntry {
+                    name: format!("{}{RANDOMIZED_SEPARATOR}{}", reference.name(), setting.name),
+                    reference,
+                    episodes: setting.episodes,
+                    randomization: Some(setting.flown_randomization()),
+                });
+            }
+        }
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let duration_s = task.episode.max_steps as f64 * dt_s;
         for k in 0..config.procedural {
@@ -62,21 +86,39 @@ impl ValidationSet {
                 drawn.points().to_vec(),
             )));
         }
-        Ok(Self { references, episodes: config.episodes, seed })
+        let nominal = references.into_iter().map(|reference| ValidationEntry {
+            name: reference.name().to_owned(),
+            reference,
+            episodes: config.episodes,
+            randomization: None,
+        });
+        Ok(Self { entries: nominal.chain(randomized).collect(), seed })
     }
 
     pub fn names(&self) -> Vec<String> {
-        self.references.iter().map(|r| r.name().to_owned()).collect()
+        self.entries.iter().map(|e| e.name.clone()).collect()
     }
 
-    /// Flies every reference from `episodes` randomized starts with the policy in `policy_path`.
+    /// Flies every entry from its randomized starts with the policy in `policy_path`.
     pub fn judge(&self, robot: &RobotModel, policy_path: &Path) -> Result<Score, ValidationError> {
         let (policy, task) = load_flight_policy(policy_path)?;
         let controller = TrackingController::Policy(Arc::new(policy));
         let mut per_reference = Vec::new();
-        for reference in &self.references {
-            let results = evaluate_tracking(robot, &controller, &task, reference.clone(), self.episodes, self.seed)?;
-            per_reference.push(ReferenceScore::of(reference.name(), &results));
+        for entry in &self.entries {
+            let (reference, episodes) = (entry.reference.clone(), entry.episodes);
+            let results = match &entry.randomization {
+                None => evaluate_tracking(robot, &controller, &task, reference, episodes, self.seed)?,
+                Some(randomization) => evaluate_tracking_randomized(
+                    robot,
+                    &controller,
+                    &task,
+                    randomization,
+                    reference,
+                    episodes,
+                    self.seed,
+                )?,
+            };
+            per_reference.push(ReferenceScore::of(&entry.name, &results));
         }
         Ok(Score::of(per_reference))
     }
@@ -111,12 +153,17 @@ impl ReferenceScore {
     pub fn is_procedural(&self) -> bool {
         self.name.starts_with(PROCEDURAL_PREFIX)
     }
+
+    /// Whether this entry was flown with randomized dynamics (`lateral~table3`).
+    pub fn is_randomized(&self) -> bool {
+        self.name.contains(RANDOMIZED_SEPARATOR)
+    }
 }
 
 /// A checkpoint's score over the whole validation set.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Score {
-    /// Completed episodes over all references, in percent: the first key of the ranking.
+    /// Completed episodes over all entries (randomized ones too), in percent: the first key of the ranking.
     pub completed_percent: f64,
     /// Mean RMS error over all episodes (m): the second key, lower is better.
     pub mean_rms_m: f64,
@@ -144,7 +191,11 @@ impl Score {
     /// Whether the gate's bars are met (the iteration bar is the caller's).
     pub fn meets(&self, gate: &Gate) -> bool {
         let judged_alone = |r: &&ReferenceScore| gate.procedural_completed_percent.is_none() || !r.is_procedural();
-        let each = self.references.iter().filter(judged_alone).all(|r| r.completed_percent() >= gate.completed_percent);
+        let bar = |r: &ReferenceScore| match gate.randomized_completed_percent {
+            Some(randomized) if r.is_randomized() => randomized,
+            _ => gate.completed_percent,
+        };
+        let each = self.references.iter().filter(judged_alone).all(|r| r.completed_percent() >= bar(r));
         let procedural = gate.procedural_completed_percent.is_none_or(|bar| {
             let drawn = || self.references.iter().filter(|r| r.is_procedural());
             let (completed, episodes) =
@@ -195,6 +246,7 @@ mod tests {
         let gate = Gate {
             completed_percent: 90.0,
             procedural_completed_percent: None,
+            randomized_completed_percent: None,
             max_rms_m: Some(0.5),
             min_iterations: 0,
         };
@@ -209,8 +261,13 @@ mod tests {
         let names = ["cruise", PROCEDURAL_PREFIX, PROCEDURAL_PREFIX];
         // The named reference flown, one drawn path flown, the other drawn path mostly not: 13/20 drawn.
         let flown = named_score(&names, &[(10, 10, 0.3), (10, 10, 0.3), (3, 10, 0.3)]);
-        let each =
-            Gate { completed_percent: 90.0, procedural_completed_percent: None, max_rms_m: None, min_iterations: 0 };
+        let each = Gate {
+            completed_percent: 90.0,
+            procedural_completed_percent: None,
+            randomized_completed_percent: None,
+            max_rms_m: None,
+            min_iterations: 0,
+        };
         assert!(!flown.meets(&each), "without the group bar every drawn path is judged alone");
         let group = Gate { procedural_completed_percent: Some(65.0), ..each };
         assert!(flown.meets(&group), "13 of 20 drawn episodes meet a 65% group bar");
@@ -218,5 +275,26 @@ mod tests {
         let named_missed = named_score(&names, &[(8, 10, 0.3), (10, 10, 0.3), (10, 10, 0.3)]);
         assert!(!named_missed.meets(&group), "the group bar never excuses a named reference");
         assert!(flown.references[1].is_procedural() && !flown.references[0].is_procedural());
+    }
+
+    #[test]
+    fn randomized_entries_have_their_own_bar_and_count_in_the_ranking() {
+        let names = ["lateral", "lateral~table3", "longitudinal~table3"];
+        let flown = named_score(&names, &[(10, 10, 0.2), (9, 10, 0.4), (8, 10, 0.5)]);
+        assert!(flown.references[1].is_randomized() && !flown.references[0].is_randomized());
+        let gate = Gate {
+            completed_percent: 95.0,
+            procedural_completed_percent: None,
+            randomized_completed_percent: None,
+            max_rms_m: None,
+            min_iterations: 0,
+        };
+        assert!(!flown.meets(&gate), "without their own bar randomized entries meet the nominal one");
+        assert!(flown.meets(&Gate { randomized_completed_percent: Some(80.0), ..gate }));
+        assert!(!flown.meets(&Gate { randomized_completed_percent: Some(85.0), ..gate }), "8/10 is below 85%");
+        let nominal_missed = named_score(&names, &[(9, 10, 0.2), (10, 10, 0.4), (10, 10, 0.5)]);
+        assert!(!nominal_missed.meets(&Gate { randomized_completed_percent: Some(0.0), ..gate }));
+        let robust = named_score(&names, &[(10, 10, 0.2), (10, 10, 0.4), (10, 10, 0.5)]);
+        assert!(robust.beats(&flown), "the randomized flights rank checkpoints too");
     }
 }

@@ -30,7 +30,7 @@ name = "climb and dive"
 max_iterations = 4
 validate_every = 1
 start_noise_std = 0.8
-validation = { references = ["longitudinal"], procedural = 1, episodes = 1 }
+validation = { references = ["longitudinal"], procedural = 1, episodes = 1, randomized = [{ name = "table3", references = ["cruise"], episodes = 1 }] }
 gate = { completed_percent = 0, min_iterations = 4 }
 task = { stage = 2 }
 "#;
@@ -98,7 +98,9 @@ fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
     assert_eq!(summary["total_env_steps"], (3 + 4) * 4 * 8);
     let selection = without_timing(&stage_dir(&whole, 2).join("selection.csv"));
     assert_eq!(selection.len(), 1 + 4, "stage 2 validated every iteration");
-    assert!(selection[0].contains(&"procedural-1_completed".to_owned()), "{:?}", selection[0]);
+    for column in ["procedural-1_completed", "cruise~table3_completed", "cruise~table3_rms_m"] {
+        assert!(selection[0].contains(&column.to_owned()), "{column}: {:?}", selection[0]);
+    }
     let selected = stages[1]["selected_iteration"].as_u64().unwrap() as usize;
     assert!(stage_dir(&whole, 2).join(format!("checkpoints/iter_{selected:06}.safetensors")).exists());
     for file in ["policy.safetensors", "curriculum.svg", "curriculum.toml"] {
