@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""The seed study of the one-command curriculum: judge each finished `flapper curriculum` run folder
+against the final controller's bars and write the table `policies/final/seeds.csv` asks for.
+
+    scripts/seed-table.py --out seeds.csv RUN_DIR [RUN_DIR ...] [--robustness] [--sysid]
+
+For every folder (its `summary.json` and `policy.safetensors`): the eight named references flown from 100
+starts with seed 11 (`flapper eval --no-baseline`), and with --robustness the sweeps behind the robustness
+bars (`flapper robustness --sweeps fluid,table3 --ranges 0.3 --episodes 100 --seed 1` on lateral and
+longitudinal), with --sysid the identified closed loop's validation fit (`flapper sysid`). Columns:
+seed, total_env_steps, total_wall_time_s, <reference>_completed (of 100), <reference>_rms_m, then
+nominal_bars_met and the optional robustness and sysid columns. A run that stopped at a missed gate (a
+summary, no policy) is a row of its own with empty flight columns and no bar met: a seed that fails counts. Prints the table and how many seeds meet
+every nominal bar. The flapper binary: $FLAPPER, else target/release/flapper.
+"""
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REFERENCES = ["cruise", "longitudinal", "lateral", "sharp-turn", "loop", "immelmann", "roll-off-the-bottom", "aerobatic"]
+# The one-command curriculum issue's nominal bars: (completed of 100 at least, mean RMS error at most, m).
+NOMINAL_BARS = {
+    "cruise": (95, 0.3),
+    "longitudinal": (95, 0.3),
+    "lateral": (95, 0.35),
+    **{name: (95, None) for name in ["sharp-turn", "loop", "immelmann", "roll-off-the-bottom", "aerobatic"]},
+}
+# Its robustness bars, in percent: Table III at once on lateral; all five fluid coefficients x[0.7, 1.3].
+ROBUSTNESS_BARS = {"lateral_table3": 90, "lateral_fluid_all_0.3": 95, "longitudinal_fluid_all_0.3": 95}
+SYSID_BAR_PERCENT = 80.0
+
+
+def flapper(args, scratch):
+    binary = os.environ.get("FLAPPER", str(Path(__file__).resolve().parent.parent / "target/release/flapper"))
+    done = subprocess.run([binary, *args, "--out", str(scratch)], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"seed-table: flapper {' '.join(args)} failed: {done.stderr.strip().splitlines()[-1:]}")
+
+
+def nominal(policy, scratch):
+    row = {}
+    for name in REFERENCES:
+        out = scratch / f"eval-{name}"
+        flapper(["eval", "--policy", str(policy), "--reference", name, "--episodes", "100", "--seed", "11",
+                 "--no-baseline"], out)
+        metrics = {r["metric"]: r["policy"] for r in csv.DictReader(open(out / "summary.csv"))}
+        row[f"{name}_completed"] = int(metrics["completed"].split("/")[0])
+        row[f"{name}_rms_m"] = float(metrics["RMS position error (m), mean"])
+    row["nominal_bars_met"] = all(
+        row[f"{name}_completed"] >= completed and (rms is None or row[f"{name}_rms_m"] <= rms)
+        for name, (completed, rms) in NOMINAL_BARS.items()
+    )
+    return row
+
+
+def robustness(policy, scratch):
+    row = {}
+    for name in ["lateral", "longitudinal"]:
+        out = scratch / f"robustness-{name}"
+        flapper(["robustness", "--policy", str(policy), "--reference", name, "--episodes", "100", "--seed", "1",
+                 "--sweeps", "fluid,table3", "--ranges", "0.3"], out)
+        result = json.load(open(out / "robustness.json"))
+        row[f"{name}_table3"] = result["table_iii"]["successes"]
+        row[f"{name}_fluid_all_0.3"] = next(
+            f["successes"] for f in result["fluid"] if f["coefficient"] == "all" and abs(f["range"] - 0.3) < 1e-9
+        )
+    row["robustness_bars_met"] = all(row[key] >= bar for key, bar in ROBUSTNESS_BARS.items())
+    return row
+
+
+def sysid(policy, scratch):
+    out = scratch / "sysid"
+    flapper(["sysid", "--policy", str(policy)], out)
+    result = json.load(open(out / "sysid.json"))
+    row = {f"sysid_fit_{axis}_percent": round(result[axis]["fit_percent"], 1) for axis in "xyz"}
+    row["sysid_bar_met"] = all(row[f"sysid_fit_{axis}_percent"] >= SYSID_BAR_PERCENT for axis in "xyz")
+    return row
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("runs", nargs="+", type=Path, help="finished `flapper curriculum` folders")
+    parser.add_argument("--out", type=Path, required=True, help="the table to write (CSV; must not exist)")
+    parser.add_argument("--robustness", action="store_true", help="also the robustness bars (~3 min a seed)")
+    parser.add_argument("--sysid", action="store_true", help="also the identification bar (~1 min a seed)")
+    args = parser.parse_args()
+    if args.out.exists():
+        sys.exit(f"seed-table: '{args.out}' exists; choose another --out (nothing was overwritten)")
+    for run in args.runs:
+        if not (run / "summary.json").is_file():
+            sys.exit(f"seed-table: '{run}' has no summary.json: not a `flapper curriculum` run")
+    rows = []
+    for run in args.runs:
+        summary = json.load(open(run / "summary.json"))
+        row = {
+            "seed": summary["seed"],
+            "total_env_steps": summary["total_env_steps"],
+            "total_wall_time_s": round(summary["total_wall_time_s"], 1),
+        }
+        if not (run / "policy.safetensors").is_file():
+            done = len(summary["stages"])
+            print(f"seed {row['seed']}: no controller ('{run}' stopped after stage {done}; steps and time of the "
+                  "stages it finished)", flush=True)
+            rows.append({**row, "nominal_bars_met": False})
+            continue
+        with tempfile.TemporaryDirectory() as scratch:
+            policy = run / "policy.safetensors"
+            row.update(nominal(policy, Path(scratch)))
+            if args.robustness:
+                row.update(robustness(policy, Path(scratch)))
+            if args.sysid:
+                row.update(sysid(policy, Path(scratch)))
+        print(", ".join(f"{k} {v}" for k, v in row.items()), flush=True)
+        rows.append(row)
+    columns = max((list(row.keys()) for row in rows), key=len)
+    with open(args.out, "w", newline="") as file:
+        writer = csv.DictWriter(file, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    met = sum(row["nominal_bars_met"] for row in rows)
+    print(f"{met} of {len(rows)} seeds meet every nominal bar; wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
