@@ -80,6 +80,8 @@ def main():
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
     parser.add_argument("--extra", type=Path, nargs="*", default=[])
     a = parser.parse_args()
+    if a.every < 1:
+        sys.exit(f"checkpoint-scan: --every must be at least 1, not {a.every}")
     flapper = os.environ.get("FLAPPER", "target/release/flapper")
     if not Path(flapper).exists():
         sys.exit(f"checkpoint-scan: no flapper binary at '{flapper}' (build with `cargo build --release` or set $FLAPPER)")
