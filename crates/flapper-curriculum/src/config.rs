@@ -121,6 +121,10 @@ pub struct Gate {
     pub max_rms_m: Option<f64>,
     /// The bar of each randomized validation entry (percent), when it differs from `completed_percent`.
     pub randomized_completed_percent: Option<f64>,
+    /// Every axis of the closed loop identified by `flapper sysid` (its default experiment) predicts
+    /// its validation record with at least this fit (percent). Identifying takes minutes, so it is
+    /// done only for checkpoints that meet every other bar of the gate (`identification`).
+    pub identification_fit_percent: Option<f64>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
     #[serde(default)]
     pub min_iterations: usize,
@@ -159,12 +163,18 @@ impl CurriculumConfig {
             if !percent(g.completed_percent)
                 || !g.procedural_completed_percent.is_none_or(percent)
                 || !g.randomized_completed_percent.is_none_or(percent)
+                || !g.identification_fit_percent.is_none_or(percent)
                 || g.max_rms_m.is_some_and(|r| !(r > 0.0 && r.is_finite()))
             {
                 return Err(bad(format!(
-                    "gate.completed_percent, gate.procedural_completed_percent and gate.randomized_completed_percent \
-                     must be in [0, 100] (got {}, {:?} and {:?}) and gate.max_rms_m positive (got {:?})",
-                    g.completed_percent, g.procedural_completed_percent, g.randomized_completed_percent, g.max_rms_m
+                    "gate.completed_percent, gate.procedural_completed_percent, gate.randomized_completed_percent \
+                     and gate.identification_fit_percent must be in [0, 100] (got {}, {:?}, {:?} and {:?}) and \
+                     gate.max_rms_m positive (got {:?})",
+                    g.completed_percent,
+                    g.procedural_completed_percent,
+                    g.randomized_completed_percent,
+                    g.identification_fit_percent,
+                    g.max_rms_m
                 )));
             }
             if let Some(std) = stage.start_noise_std
@@ -344,5 +354,7 @@ task = { stage = 2 }
         assert!(e.contains("'t3'") && e.contains("reference"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, randomized_completed_percent = 101 }");
         assert!(e.contains("randomized_completed_percent") && e.contains("101"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, identification_fit_percent = -5 }");
+        assert!(e.contains("identification_fit_percent") && e.contains("-5"), "{e}");
     }
 }

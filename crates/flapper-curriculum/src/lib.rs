@@ -6,6 +6,7 @@
 
 pub mod config;
 pub mod figure;
+pub mod identification;
 pub mod run;
 pub mod selection;
 pub mod summary;

@@ -20,8 +20,9 @@ use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
 
-use crate::config::{CurriculumConfig, StageConfig};
+use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::figure::write_curriculum_figure;
+use crate::identification::identification_fit_percent;
 use crate::selection::{Selection, SelectionError, StageOutcome, Validated};
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
@@ -37,16 +38,15 @@ pub enum CurriculumError {
     #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
     Busy(PathBuf),
     #[error(
-        "stage {stage} ('{name}') missed its gate ({gate}) within {iterations} iterations; its best checkpoint, iteration {best_iteration}, completed {best_completed:.1}% with a mean RMS error of {best_rms_m:.3} m. Its runs are in '{dir}'"
+        "stage {stage} ('{name}') missed its gate ({gate}) within {iterations} iterations; its best checkpoint, {best}. Its runs are in '{dir}'"
     )]
     GateMissed {
         stage: usize,
         name: String,
         gate: String,
         iterations: usize,
-        best_iteration: usize,
-        best_completed: f64,
-        best_rms_m: f64,
+        /// The best checkpoint's iteration and score, and the identification of those identified.
+        best: String,
         dir: PathBuf,
     },
     #[error(transparent)]
@@ -172,7 +172,7 @@ fn run_stage(
         ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?;
     let names = set.names();
     let selection_path = here.join("selection.csv");
-    let mut selection = Selection::read(&selection_path, &names)?;
+    let mut selection = Selection::read(&selection_path, &names, stage.gate.identification_fit_percent.is_some())?;
 
     let saved = saved_checkpoints(&here);
     let resumed_at = saved.last().map(|(iteration, _)| *iteration);
@@ -185,11 +185,8 @@ fn run_stage(
     selection.truncate_after(resumed_at.unwrap_or(0));
     for (iteration, path) in saved {
         if !selection.has(iteration) {
-            let began = Instant::now();
-            let score = set.judge(robot, &path)?;
             let env_steps = checkpoint::load(&path)?.info.env_steps;
-            let row = Validated { iteration, env_steps, validation_s: began.elapsed().as_secs_f64(), score };
-            selection.rows.push(row);
+            selection.rows.push(judge(robot, &set, &stage.gate, iteration, env_steps, &path)?);
         }
     }
     selection.rows.sort_by_key(|r| r.iteration);
@@ -212,14 +209,13 @@ fn run_stage(
         let mut trainer = flight_trainer(robot, &train_config, &here, start)?;
         let shared = Arc::new(Mutex::new((selection, Vec::<Validated>::new())));
         let hook_state = shared.clone();
-        let (hook_robot, hook_names, hook_path) = (robot.clone(), names.clone(), selection_path.clone());
+        let (hook_robot, hook_names, hook_path, hook_gate) =
+            (robot.clone(), names.clone(), selection_path.clone(), stage.gate);
         trainer.add_checkpoint_hook(Box::new(move |event| {
             let path = checkpoint_path(event.dir, event.iteration);
-            let began = Instant::now();
-            let score = set.judge(&hook_robot, &path).map_err(|e| e.to_string())?;
             let env_steps = event.history.last().map_or(0, |l| l.env_steps);
             let row =
-                Validated { iteration: event.iteration, env_steps, validation_s: began.elapsed().as_secs_f64(), score };
+                judge(&hook_robot, &set, &hook_gate, event.iteration, env_steps, &path).map_err(|e| e.to_string())?;
             let mut state = hook_state.lock().expect("no panic while holding the selection");
             state.0.rows.retain(|r| r.iteration != row.iteration);
             state.0.rows.push(row.clone());
@@ -243,6 +239,33 @@ fn run_stage(
     select(stage, number, &here, &selection)
 }
 
+/// Flies the validation set with the checkpoint at `path` and, where the gate asks for identification
+/// and the checkpoint meets every other bar, identifies its closed loop.
+fn judge(
+    robot: &RobotModel,
+    set: &ValidationSet,
+    gate: &Gate,
+    iteration: usize,
+    env_steps: u64,
+    path: &Path,
+) -> Result<Validated, ValidationError> {
+    let began = Instant::now();
+    let score = set.judge(robot, path)?;
+    let identification_fit_percent = match gate.identification_fit_percent {
+        Some(_) if iteration >= gate.min_iterations && score.meets(gate) => {
+            Some(identification_fit_percent(robot, path)?)
+        }
+        _ => None,
+    };
+    Ok(Validated {
+        iteration,
+        env_steps,
+        validation_s: began.elapsed().as_secs_f64(),
+        score,
+        identification_fit_percent,
+    })
+}
+
 /// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate.
 fn select(
     stage: &StageConfig,
@@ -261,9 +284,13 @@ fn select(
             name: stage.name.clone(),
             gate: describe_gate(&stage.gate),
             iterations,
-            best_iteration: best.map_or(0, |b| b.iteration),
-            best_completed: best.map_or(0.0, |b| b.score.completed_percent),
-            best_rms_m: best.map_or(f64::NAN, |b| b.score.mean_rms_m),
+            best: format!(
+                "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}",
+                best.map_or(0, |b| b.iteration),
+                best.map_or(0.0, |b| b.score.completed_percent),
+                best.map_or(f64::NAN, |b| b.score.mean_rms_m),
+                describe_identified(selection)
+            ),
             dir: here.to_owned(),
         });
     };
@@ -286,8 +313,25 @@ fn select(
     Ok(outcome)
 }
 
+/// The identified checkpoints of a stage in words (x, y, z fit of each), for the missed gate's message.
+fn describe_identified(selection: &Selection) -> String {
+    let identified: Vec<String> = selection
+        .rows
+        .iter()
+        .filter_map(|r| {
+            let [x, y, z] = r.identification_fit_percent?;
+            Some(format!("{}: x {x:.1}%, y {y:.1}%, z {z:.1}%", r.iteration))
+        })
+        .collect();
+    match (selection.identified, identified.is_empty()) {
+        (false, _) => String::new(),
+        (true, true) => "; no checkpoint met the other bars, none was identified".to_owned(),
+        (true, false) => format!("; identified (iteration: fit per axis): {}", identified.join("; ")),
+    }
+}
+
 /// The gate in words, for messages.
-pub fn describe_gate(gate: &crate::config::Gate) -> String {
+pub fn describe_gate(gate: &Gate) -> String {
     let mut text = match gate.procedural_completed_percent {
         None => format!("every validation reference completed in at least {}% of its episodes", gate.completed_percent),
         Some(drawn) => format!(
@@ -301,6 +345,9 @@ pub fn describe_gate(gate: &crate::config::Gate) -> String {
     }
     if let Some(rms) = gate.max_rms_m {
         text.push_str(&format!(", mean RMS error at most {rms} m"));
+    }
+    if let Some(fit) = gate.identification_fit_percent {
+        text.push_str(&format!(", every axis of the identified closed loop (flapper sysid) fitting at least {fit}%"));
     }
     if gate.min_iterations > 0 {
         text.push_str(&format!(", from iteration {} on", gate.min_iterations));

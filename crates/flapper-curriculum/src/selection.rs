@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::config::Gate;
+use crate::identification::meets_identification_bar;
 use crate::validation::{ReferenceScore, Score};
 
 /// One validated checkpoint.
@@ -13,9 +14,13 @@ use crate::validation::{ReferenceScore, Score};
 pub struct Validated {
     pub iteration: usize,
     pub env_steps: u64,
-    /// Seconds spent flying the validation set.
+    /// Seconds spent judging it: flying the validation set, and identifying it where asked.
     pub validation_s: f64,
     pub score: Score,
+    /// Per axis x, y, z, the fit (percent) of its identified closed loop
+    /// ([`crate::identification`]): `None` where not identified (the gate asks for no identification,
+    /// or the checkpoint missed the gate's other bars), NaN where it could not be identified.
+    pub identification_fit_percent: Option<[f64; 3]>,
 }
 
 /// The table's file, row by row: fixed columns, then completion and RMS per reference.
@@ -28,17 +33,20 @@ pub enum SelectionError {
 #[derive(Debug, Clone, Default)]
 pub struct Selection {
     pub rows: Vec<Validated>,
+    /// Whether the table has the identification columns (its stage's gate has an identification bar).
+    pub identified: bool,
 }
 
 impl Selection {
-    /// The rows of `path` (none if it does not exist), for `references` in this order.
-    pub fn read(path: &Path, references: &[String]) -> Result<Self, SelectionError> {
+    /// The rows of `path` (none if it does not exist), for `references` in this order, with the
+    /// identification columns when `identified`.
+    pub fn read(path: &Path, references: &[String], identified: bool) -> Result<Self, SelectionError> {
         if !path.exists() {
-            return Ok(Self::default());
+            return Ok(Self { rows: Vec::new(), identified });
         }
         let error = |message: String| SelectionError::File { path: path.to_owned(), message };
         let mut reader = csv::Reader::from_path(path).map_err(|e| error(e.to_string()))?;
-        let expected = header(references);
+        let expected = header(references, identified);
         let headers: Vec<String> =
             reader.headers().map_err(|e| error(e.to_string()))?.iter().map(String::from).collect();
         if headers != expected {
@@ -67,14 +75,22 @@ impl Selection {
                     })
                 })
                 .collect::<Result<Vec<_>, SelectionError>>()?;
+            let first_fit = FIXED.len() + 3 * references.len();
+            let identification_fit_percent = match record.get(first_fit) {
+                Some(text) if identified && !text.is_empty() => {
+                    Some([number(first_fit)?, number(first_fit + 1)?, number(first_fit + 2)?])
+                }
+                _ => None,
+            };
             rows.push(Validated {
                 iteration: number(0)? as usize,
                 env_steps: number(1)? as u64,
                 validation_s: number(4)?,
                 score: Score { completed_percent: number(2)?, mean_rms_m: number(3)?, references },
+                identification_fit_percent,
             });
         }
-        Ok(Self { rows })
+        Ok(Self { rows, identified })
     }
 
     pub fn write(&self, path: &Path, references: &[String]) -> Result<(), SelectionError> {
@@ -90,9 +106,15 @@ impl Selection {
             for r in &row.score.references {
                 values.extend([r.completed.to_string(), r.episodes.to_string(), r.mean_rms_m.to_string()]);
             }
+            if self.identified {
+                match row.identification_fit_percent {
+                    Some(fits) => values.extend(fits.map(|fit| fit.to_string())),
+                    None => values.extend([String::new(), String::new(), String::new()]),
+                }
+            }
             values
         });
-        flapper_files::write_csv_rows(path, &header(references), rows)
+        flapper_files::write_csv_rows(path, &header(references, self.identified), rows)
             .map_err(|e| SelectionError::File { path: path.to_owned(), message: e.to_string() })
     }
 
@@ -126,7 +148,13 @@ impl Selection {
     }
 
     fn eligible<'a>(&'a self, gate: &'a Gate) -> impl Iterator<Item = &'a Validated> {
-        self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate))
+        self.rows.iter().filter(|r| {
+            r.iteration >= gate.min_iterations
+                && r.score.meets(gate)
+                && gate
+                    .identification_fit_percent
+                    .is_none_or(|bar| meets_identification_bar(r.identification_fit_percent, bar))
+        })
     }
 }
 
@@ -137,13 +165,17 @@ fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> 
     })
 }
 
-/// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`.
+/// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`,
+/// and a table with identification ends with `identification_<axis>_fit_percent` for x, y and z.
 const FIXED: [&str; 5] = ["iteration", "env_steps", "completed_percent", "mean_rms_m", "validation_s"];
 
-fn header(references: &[String]) -> Vec<String> {
+fn header(references: &[String], identified: bool) -> Vec<String> {
     let mut columns: Vec<String> = FIXED.iter().map(|c| c.to_string()).collect();
     for name in references {
         columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
+    }
+    if identified {
+        columns.extend(["x", "y", "z"].map(|axis| format!("identification_{axis}_fit_percent")));
     }
     columns
 }
@@ -173,24 +205,41 @@ mod tests {
     fn row(iteration: usize, completed: usize, rms: f64) -> Validated {
         let references = vec![ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms }];
         let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
-        Validated { iteration, env_steps: iteration as u64 * 100, validation_s: 1.5, score }
+        Validated {
+            iteration,
+            env_steps: iteration as u64 * 100,
+            validation_s: 1.5,
+            score,
+            identification_fit_percent: None,
+        }
     }
 
     #[test]
     fn the_best_checkpoint_is_chosen_by_completion_then_error_never_simply_the_last() {
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)] };
+        let selection = Selection {
+            rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)],
+            identified: false,
+        };
         assert_eq!(selection.best().unwrap().iteration, 30);
         let gate = Gate {
             completed_percent: 100.0,
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: Some(0.35),
+            identification_fit_percent: None,
             min_iterations: 0,
         };
         assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
         let later = Gate { min_iterations: 35, ..gate };
         assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
-        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)] };
+        let identified = Gate { identification_fit_percent: Some(80.0), max_rms_m: None, ..gate };
+        let mut with_fits = Selection { identified: true, ..selection.clone() };
+        assert!(with_fits.best_meeting(&identified).is_none(), "flown well, not identified: not eligible");
+        with_fits.rows[2].identification_fit_percent = Some([85.0, 79.0, 90.0]);
+        with_fits.rows[1].identification_fit_percent = Some([85.0, 81.0, 90.0]);
+        assert_eq!(with_fits.best_meeting(&identified).unwrap().iteration, 20, "30 flies better, 20 is identified");
+        assert_eq!(with_fits.best().unwrap().iteration, 30, "the best of all ignores the identification");
+        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)], identified: false };
         assert_eq!(ties.best().unwrap().iteration, 10, "the earliest of equal checkpoints");
     }
 
@@ -200,12 +249,19 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("selection.csv");
         let names = vec!["cruise".to_owned()];
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)] };
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], identified: false };
         selection.write(&path, &names).unwrap();
-        let back = Selection::read(&path, &names).unwrap();
+        let back = Selection::read(&path, &names, false).unwrap();
         assert_eq!(back.rows, selection.rows);
-        let e = Selection::read(&path, &["loop".to_owned()]).unwrap_err().to_string();
+        let e = Selection::read(&path, &["loop".to_owned()], false).unwrap_err().to_string();
         assert!(e.contains("selection.csv") && e.contains("loop_completed"), "{e}");
+        let e = Selection::read(&path, &names, true).unwrap_err().to_string();
+        assert!(e.contains("identification_x_fit_percent"), "a table without the identification columns: {e}");
+        let mut identified = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], identified: true };
+        identified.rows[1].identification_fit_percent = Some([81.25, 79.5, 90.0]);
+        identified.write(&path, &names).unwrap();
+        let back = Selection::read(&path, &names, true).unwrap();
+        assert_eq!(back.rows, identified.rows, "fits where identified, none where not");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -28,6 +28,8 @@ pub enum ValidationError {
     Reference(#[from] ReferenceError),
     #[error(transparent)]
     Model(#[from] ModelError),
+    #[error("identification: {0}")]
+    Identification(String),
 }
 
 /// How the drawn references of a validation set are named: `procedural-1`, `procedural-2`, ...
@@ -248,6 +250,7 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: Some(0.5),
+            identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(score(&[(10, 10, 0.3), (9, 10, 0.4)]).meets(&gate));
@@ -266,6 +269,7 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: None,
+            identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&each), "without the group bar every drawn path is judged alone");
@@ -287,6 +291,7 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: None,
+            identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&gate), "without their own bar randomized entries meet the nominal one");

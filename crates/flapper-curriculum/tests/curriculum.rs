@@ -163,6 +163,26 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+#[test]
+fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met() {
+    let dir = scratch("identification");
+    let gate = "gate = { completed_percent = 0, min_iterations = 4, identification_fit_percent = 80 }";
+    let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
+    let e = run(&dir, &text, None).unwrap_err();
+    // Four iterations of training cannot cruise through the identification's 340 s records.
+    assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("identified closed loop"), "{e}");
+    assert!(e.contains("identified (iteration: fit per axis): 4: x NaN%, y NaN%, z NaN%"), "{e}");
+    let table = std::fs::read_to_string(stage_dir(&dir, 1).join("selection.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().collect();
+    assert!(
+        rows[0].ends_with("identification_x_fit_percent,identification_y_fit_percent,identification_z_fit_percent")
+    );
+    assert!(rows[1].starts_with("2,") && rows[1].ends_with(",,,"), "before min_iterations: not identified: {table}");
+    assert!(rows[2].starts_with("4,") && rows[2].ends_with(",NaN,NaN,NaN"), "{table}");
+    assert_eq!(run(&dir, &text, None).unwrap_err(), e, "read back, the table gives the same verdict");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap() {
