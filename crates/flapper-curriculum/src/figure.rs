@@ -27,7 +27,8 @@ pub fn write_curriculum_figure(stage_dirs: &[PathBuf], config: &CurriculumConfig
         panels[3].push(curve(series(&|r| r.update.action_std)));
         panels[4].push(curve(series(&|r| r.update.kl)));
         panels[5].push(curve(series(&|r| r.update.learning_rate)));
-        let (names, identified) = selection_columns(dir)?;
+        let names = selection_names(dir)?;
+        let identified = config.stages[k].gate.identification_fit_percent.is_some();
         let selection = Selection::read(&dir.join("selection.csv"), &names, identified).map_err(|e| e.to_string())?;
         let at = |f: &dyn Fn(&crate::selection::Validated) -> f64| -> Vec<(f64, f64)> {
             selection.rows.iter().map(|r| (offset_m + r.env_steps as f64 / 1e6, f(r))).collect()
@@ -58,14 +59,12 @@ pub fn write_curriculum_figure(stage_dirs: &[PathBuf], config: &CurriculumConfig
     draw(path, (1400, 1100), &panels, (3, 2))
 }
 
-/// The reference names of a stage's selection table, and whether it has identification columns,
-/// from its header.
-fn selection_columns(dir: &Path) -> Result<(Vec<String>, bool), String> {
+/// The reference names of a stage's selection table, from its header.
+fn selection_names(dir: &Path) -> Result<Vec<String>, String> {
     let path = dir.join("selection.csv");
     let mut reader = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let headers = reader.headers().map_err(|e| e.to_string())?;
-    let names = headers.iter().filter_map(|h| h.strip_suffix("_completed")).map(String::from).collect();
-    Ok((names, headers.iter().any(|h| h.starts_with("identification_"))))
+    Ok(headers.iter().filter_map(|h| h.strip_suffix("_completed")).map(String::from).collect())
 }
 
 /// Return over windows of 20 iterations, weighted by the episodes that ended (few end per iteration).

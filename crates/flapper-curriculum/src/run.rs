@@ -23,7 +23,7 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::figure::write_curriculum_figure;
 use crate::identification::identification_fit_percent;
-use crate::selection::{Selection, SelectionError, StageOutcome, Validated};
+use crate::selection::{Selection, SelectionError, StageOutcome, Validated, meets_flight_bars};
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
 
@@ -252,9 +252,7 @@ fn judge(
     let began = Instant::now();
     let score = set.judge(robot, path)?;
     let identification_fit_percent = match gate.identification_fit_percent {
-        Some(_) if iteration >= gate.min_iterations && score.meets(gate) => {
-            Some(identification_fit_percent(robot, path)?)
-        }
+        Some(_) if meets_flight_bars(gate, iteration, &score) => Some(identification_fit_percent(robot, path)?),
         _ => None,
     };
     Ok(Validated {

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use flapper_analysis::sysid::AXES;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Gate;
@@ -149,13 +150,18 @@ impl Selection {
 
     fn eligible<'a>(&'a self, gate: &'a Gate) -> impl Iterator<Item = &'a Validated> {
         self.rows.iter().filter(|r| {
-            r.iteration >= gate.min_iterations
-                && r.score.meets(gate)
+            meets_flight_bars(gate, r.iteration, &r.score)
                 && gate
                     .identification_fit_percent
                     .is_none_or(|bar| meets_identification_bar(r.identification_fit_percent, bar))
         })
     }
+}
+
+/// Whether a checkpoint validated at `iteration` with `score` meets every bar of `gate` but the
+/// identification's (which is looked at only then).
+pub fn meets_flight_bars(gate: &Gate, iteration: usize, score: &Score) -> bool {
+    iteration >= gate.min_iterations && score.meets(gate)
 }
 
 fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
@@ -175,7 +181,7 @@ fn header(references: &[String], identified: bool) -> Vec<String> {
         columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
     }
     if identified {
-        columns.extend(["x", "y", "z"].map(|axis| format!("identification_{axis}_fit_percent")));
+        columns.extend(AXES.map(|axis| format!("identification_{axis}_fit_percent")));
     }
     columns
 }
