@@ -10,7 +10,8 @@ bars (`flapper robustness --sweeps fluid,table3 --ranges 0.3 --episodes 100 --se
 longitudinal), with --sysid the identified closed loop's validation fit (`flapper sysid`). Columns:
 seed, total_env_steps, total_wall_time_s, <reference>_completed (of 100), <reference>_rms_m, then
 nominal_bars_met and the optional robustness and sysid columns. A run that stopped at a missed gate (a
-summary, no policy) is a row of its own with empty flight columns and no bar met: a seed that fails counts. Prints the table and how many seeds meet
+summary, no policy) is a row of its own with empty flight columns and no bar met (its steps and time include
+the stage that missed): a seed that fails counts. Prints the table and how many seeds meet
 every nominal bar. The flapper binary: $FLAPPER, else target/release/flapper.
 """
 
@@ -41,6 +42,22 @@ def flapper(args, scratch):
     done = subprocess.run([binary, *args, "--out", str(scratch)], capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"seed-table: flapper {' '.join(args)} failed: {done.stderr.strip().splitlines()[-1:]}")
+
+
+def spent_in_stage(stage_dir):
+    """Environment steps and seconds (training and validation) a stage spent before it stopped: what a run
+    that missed the stage's gate spent there, which its summary.json does not count."""
+    training = stage_dir / "training.csv"
+    if not training.is_file():
+        return None
+    rows = list(csv.DictReader(open(training)))
+    if not rows:
+        return None
+    # The training clock runs through the validations between iterations; only the last one comes after it.
+    last = int(rows[-1]["iteration"])
+    validations = stage_dir / "selection.csv"
+    after = [r for r in csv.DictReader(open(validations)) if int(r["iteration"]) >= last] if validations.is_file() else []
+    return int(rows[-1]["env_steps"]), float(rows[-1]["wall_time_s"]) + sum(float(r["validation_s"]) for r in after)
 
 
 def nominal(policy, scratch):
@@ -105,8 +122,13 @@ def main():
         }
         if not (run / "policy.safetensors").is_file():
             done = len(summary["stages"])
-            print(f"seed {row['seed']}: no controller ('{run}' stopped after stage {done}; steps and time of the "
-                  "stages it finished)", flush=True)
+            missed = spent_in_stage(run / f"stage{done + 1}")
+            if missed:
+                row["total_env_steps"] += missed[0]
+                row["total_wall_time_s"] = round(row["total_wall_time_s"] + missed[1], 1)
+            print(f"seed {row['seed']}: no controller ('{run}' finished {done} stages"
+                  + (f" and stopped in stage {done + 1}, whose steps and time are counted" if missed else "")
+                  + ")", flush=True)
             rows.append({**row, "nominal_bars_met": False})
             continue
         with tempfile.TemporaryDirectory() as scratch:

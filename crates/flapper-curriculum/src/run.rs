@@ -23,7 +23,7 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::figure::write_curriculum_figure;
 use crate::identification::identification_fit_percent;
-use crate::selection::{Selection, SelectionError, StageOutcome, Validated, meets_flight_bars};
+use crate::selection::{Selection, SelectionError, StageOutcome, Validated, meets_flight_bars, stage_wall_time_s};
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
 
@@ -293,13 +293,12 @@ fn select(
         });
     };
     let checkpoint = PathBuf::from(format!("stage{number}/checkpoints/iter_{:06}.safetensors", best.iteration));
-    let validation_s: f64 = selection.rows.iter().map(|r| r.validation_s).sum();
     let outcome = StageOutcome {
         stage: number,
         name: stage.name.clone(),
         iterations,
         env_steps: last.map_or(0, |l| l.env_steps),
-        wall_time_s: last.map_or(0.0, |l| l.wall_time_s) + validation_s,
+        wall_time_s: stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations),
         selected_iteration: best.iteration,
         validation_score: best.score.completed_percent,
         validation_rms_m: best.score.mean_rms_m,

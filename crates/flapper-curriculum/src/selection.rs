@@ -204,6 +204,16 @@ pub struct StageOutcome {
     pub checkpoint: PathBuf,
 }
 
+/// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the
+/// last logged iteration) already runs through every validation done between iterations, as the
+/// checkpoint hook runs inside training; only the validations of the last logged iteration or later
+/// (the final one) come after it.
+pub fn stage_wall_time_s(selection: &Selection, trained_wall_time_s: f64, last_iteration: usize) -> f64 {
+    let after_last_log: f64 =
+        selection.rows.iter().filter(|r| r.iteration >= last_iteration).map(|r| r.validation_s).sum();
+    trained_wall_time_s + after_last_log
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,6 +228,15 @@ mod tests {
             score,
             identification_fit_percent: None,
         }
+    }
+
+    #[test]
+    fn a_stages_wall_time_counts_each_validation_once() {
+        // Validations at 10 and 20 ran inside training (its clock reads 100 s at iteration 20); the one at
+        // 20 ran after that row was logged, so it alone is added.
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4)], identified: false };
+        assert_eq!(stage_wall_time_s(&selection, 100.0, 20), 101.5);
+        assert_eq!(stage_wall_time_s(&selection, 100.0, 21), 100.0, "a stage that trained past its last validation");
     }
 
     #[test]
