@@ -123,7 +123,12 @@ pub struct Gate {
     pub randomized_completed_percent: Option<f64>,
     /// Every axis of the closed loop identified by `flapper sysid` (its default experiment) predicts
     /// its validation record with at least this fit (percent). Identifying takes minutes, so it is
-    /// done only for checkpoints that meet every other bar of the gate (`identification`).
+    /// done only for checkpoints that meet every other bar of the gate (`identification`). This bar is
+    /// sought, not required: the stage trains on until a checkpoint meets it with the others, and if
+    /// none has when the budget is spent it hands over the best checkpoint that flies the other bars and
+    /// records that the identification was not met (`identification_met` in `selected.json`). How well
+    /// a model predicts the flight is a property of the analysis, not of the flying; it must not throw
+    /// away a controller that flies every bar.
     pub identification_fit_percent: Option<f64>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
     #[serde(default)]

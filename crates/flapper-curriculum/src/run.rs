@@ -264,7 +264,9 @@ fn judge(
     })
 }
 
-/// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate.
+/// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate. The identification
+/// bar is sought, not required ([`Gate::identification_fit_percent`]): without a checkpoint that meets
+/// it, the best one that meets the other bars is handed over, marked as not identified well enough.
 fn select(
     stage: &StageConfig,
     number: usize,
@@ -275,7 +277,14 @@ fn select(
         .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
     let last = history.last();
     let iterations = last.map_or(0, |l| l.iteration);
-    let Some(best) = selection.best_meeting(&stage.gate) else {
+    let chosen = match selection.best_meeting(&stage.gate) {
+        Some(best) => Some((best, stage.gate.identification_fit_percent.map(|_| true))),
+        None => selection
+            .best_flying(&stage.gate)
+            .filter(|_| stage.gate.identification_fit_percent.is_some())
+            .map(|b| (b, Some(false))),
+    };
+    let Some((best, identification_met)) = chosen else {
         let best = selection.best();
         return Err(CurriculumError::GateMissed {
             stage: number,
@@ -303,6 +312,7 @@ fn select(
         validation_score: best.score.completed_percent,
         validation_rms_m: best.score.mean_rms_m,
         checkpoint,
+        identification_met,
     };
     let selected = here.join("selected.json");
     flapper_files::write_json(&selected, &outcome)
@@ -344,7 +354,10 @@ pub fn describe_gate(gate: &Gate) -> String {
         text.push_str(&format!(", mean RMS error at most {rms} m"));
     }
     if let Some(fit) = gate.identification_fit_percent {
-        text.push_str(&format!(", every axis of the identified closed loop (flapper sysid) fitting at least {fit}%"));
+        text.push_str(&format!(
+            ", and sought (required only while the budget lasts) every axis of the identified closed loop \
+             (flapper sysid) fitting at least {fit}%"
+        ));
     }
     if gate.min_iterations > 0 {
         text.push_str(&format!(", from iteration {} on", gate.min_iterations));

@@ -143,6 +143,11 @@ impl Selection {
         best(self.eligible(gate))
     }
 
+    /// The best checkpoint among those that meet every bar of the gate but the identification's.
+    pub fn best_flying<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        best(self.rows.iter().filter(|r| meets_flight_bars(gate, r.iteration, &r.score)))
+    }
+
     /// The best checkpoint of all, gate or not.
     pub fn best(&self) -> Option<&Validated> {
         best(self.rows.iter())
@@ -202,6 +207,10 @@ pub struct StageOutcome {
     pub validation_rms_m: f64,
     /// The selected checkpoint, relative to the curriculum folder.
     pub checkpoint: PathBuf,
+    /// Whether the selected checkpoint met the gate's identification bar; absent where the gate has
+    /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identification_met: Option<bool>,
 }
 
 /// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the
@@ -264,6 +273,8 @@ mod tests {
         with_fits.rows[1].identification_fit_percent = Some([85.0, 81.0, 90.0]);
         assert_eq!(with_fits.best_meeting(&identified).unwrap().iteration, 20, "30 flies better, 20 is identified");
         assert_eq!(with_fits.best().unwrap().iteration, 30, "the best of all ignores the identification");
+        assert_eq!(with_fits.best_flying(&identified).unwrap().iteration, 30, "flying bars only");
+        assert!(with_fits.best_flying(&later).is_none(), "before min_iterations nothing flies the gate");
         let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)], identified: false };
         assert_eq!(ties.best().unwrap().iteration, 10, "the earliest of equal checkpoints");
     }
