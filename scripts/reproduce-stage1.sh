@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Trains the curriculum's stage 1 again with the shipped seed and compares its training.csv with the shipped
 # one (policies/final/stage1/training.csv) row for row, timing columns apart. Training is reproducible on the
-# same machine kind with the same thread count (docs/training.md); about 2-3 minutes on 2 cores.
+# same CPU model with the same thread count, not across CPU models (policies/final/README.md: gemm's kernels
+# and block sizes follow the CPU); about 2-3 minutes on 2 cores.
 #   scripts/reproduce-stage1.sh [SHIPPED_DIR]   (default policies/final)
 set -euo pipefail
 shipped=${1:-policies/final}
@@ -18,6 +19,10 @@ if len(shipped) != len(again):
 for row, (a, b) in enumerate(zip(shipped, again), start=1):
     differing = [k for k in a if k not in timing and a[k] != b.get(k)]
     if differing:
-        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)}")
+        first = open("/proc/cpuinfo").read().split("\n\n")[0].splitlines()
+        info = {k.strip(): v.strip() for k, v in (l.split(":", 1) for l in first if ":" in l)}
+        cpu = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}"
+        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} (this CPU: {cpu}; training "
+                 "reproduces on the CPU model it ran on, policies/final/README.md)")
 print(f"reproduce-stage1: {len(again)} rows identical to {sys.argv[1]} (timing columns apart)")
 PY

@@ -3,6 +3,7 @@
 //! validation set and gate. Each stage becomes an ordinary `flapper train` config ([`TrainConfig`]), so
 //! every key a training config takes is available here with the same meaning and the same checks.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use flapper_task::config::RandomizationConfig;
@@ -77,6 +78,11 @@ pub struct ValidationConfig {
     pub procedural: usize,
     /// Randomized starts per reference.
     pub episodes: usize,
+    /// More (or fewer) starts for some of `references`, by name: a manoeuvre whose completion swings
+    /// from checkpoint to checkpoint needs more starts than the rest to be judged as the evaluation's
+    /// 100 starts will judge it (`{ aerobatic = 100 }`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub reference_episodes: BTreeMap<String, usize>,
     /// References flown again with the robot's dynamics and the wind drawn per episode, so that
     /// selection sees robustness too (the nominal flights cannot).
     #[serde(default)]
@@ -99,6 +105,24 @@ pub struct RandomizedValidation {
     pub randomization: RandomizationConfig,
 }
 
+impl ValidationConfig {
+    /// The names of the entries the named references make: each of `references`, then
+    /// `<reference>~<name>` for each randomized one (the procedural ones are drawn later).
+    pub fn entry_names(&self) -> Vec<String> {
+        let randomized = self.randomized.iter().flat_map(|r| {
+            r.references
+                .iter()
+                .map(move |reference| format!("{reference}{}{}", crate::validation::RANDOMIZED_SEPARATOR, r.name))
+        });
+        self.references.iter().cloned().chain(randomized).collect()
+    }
+
+    /// How many starts `reference` is flown from.
+    pub fn episodes_of(&self, reference: &str) -> usize {
+        self.reference_episodes.get(reference).copied().unwrap_or(self.episodes)
+    }
+}
+
 impl RandomizedValidation {
     /// The randomization as flown (switched on).
     pub fn flown_randomization(&self) -> RandomizationConfig {
@@ -107,7 +131,7 @@ impl RandomizedValidation {
 }
 
 /// When a stage has done its job: checked at every validation from `min_iterations` on.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Gate {
     /// Every validation reference completed in at least this share of its episodes (percent); the
@@ -119,6 +143,11 @@ pub struct Gate {
     pub procedural_completed_percent: Option<f64>,
     /// The mean RMS tracking error over all validation episodes at most this (m).
     pub max_rms_m: Option<f64>,
+    /// Some validation entries' own mean RMS error at most this (m), by entry name (a reference of
+    /// `validation.references`, or `<reference>~<name>` for a randomized one): the evaluation's
+    /// per-reference bars, which the mean over all entries cannot see (`{ longitudinal = 0.3 }`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub reference_max_rms_m: BTreeMap<String, f64>,
     /// The bar of each randomized validation entry (percent), when it differs from `completed_percent`.
     pub randomized_completed_percent: Option<f64>,
     /// Every axis of the closed loop identified by `flapper sysid` (its default experiment) predicts
@@ -180,6 +209,27 @@ impl CurriculumConfig {
                     g.randomized_completed_percent,
                     g.identification_fit_percent,
                     g.max_rms_m
+                )));
+            }
+            if let Some((name, _)) = v.reference_episodes.iter().find(|(name, _)| !v.references.contains(name)) {
+                return Err(bad(format!(
+                    "validation.reference_episodes names '{name}', which is not among validation.references ({})",
+                    v.references.join(", ")
+                )));
+            }
+            if let Some((name, episodes)) = v.reference_episodes.iter().find(|(_, episodes)| **episodes == 0) {
+                return Err(bad(format!("validation.reference_episodes: '{name}' needs episodes > 0, got {episodes}")));
+            }
+            let entries = v.entry_names();
+            if let Some((name, _)) = g.reference_max_rms_m.iter().find(|(name, _)| !entries.contains(name)) {
+                return Err(bad(format!(
+                    "gate.reference_max_rms_m names '{name}', which is not a validation entry ({})",
+                    entries.join(", ")
+                )));
+            }
+            if let Some((name, rms)) = g.reference_max_rms_m.iter().find(|(_, rms)| !(**rms > 0.0 && rms.is_finite())) {
+                return Err(bad(format!(
+                    "gate.reference_max_rms_m: '{name}' needs a positive bar in metres, got {rms}"
                 )));
             }
             if let Some(std) = stage.start_noise_std
@@ -360,5 +410,42 @@ task = { stage = 2 }
         assert!(e.contains("randomized_completed_percent") && e.contains("101"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, identification_fit_percent = -5 }");
         assert!(e.contains("identification_fit_percent") && e.contains("-5"), "{e}");
+        let second = "validation = { references = [\"longitudinal\"], procedural = 1, episodes = 1 }";
+        let e = err(
+            second,
+            "validation = { references = [\"longitudinal\"], episodes = 1, reference_episodes = { loop = 5 } }",
+        );
+        assert!(e.contains("stage 2") && e.contains("'loop'") && e.contains("longitudinal"), "{e}");
+        let e = err(
+            second,
+            "validation = { references = [\"longitudinal\"], episodes = 1, reference_episodes = { longitudinal = 0 } }",
+        );
+        assert!(e.contains("'longitudinal'") && e.contains("episodes > 0"), "{e}");
+        let e = err("max_rms_m = 100.0 }", "max_rms_m = 100.0, reference_max_rms_m = { lateral = 0.3 } }");
+        assert!(e.contains("stage 2") && e.contains("'lateral'") && e.contains("not a validation entry"), "{e}");
+        let e = err("max_rms_m = 100.0 }", "max_rms_m = 100.0, reference_max_rms_m = { longitudinal = -0.3 } }");
+        assert!(e.contains("'longitudinal'") && e.contains("-0.3"), "{e}");
+    }
+
+    #[test]
+    fn some_references_can_have_their_own_starts_and_rms_bars() {
+        let text = TINY
+            .replacen(
+                "validation = { references = [\"longitudinal\"], procedural = 1, episodes = 1 }",
+                "validation = { references = [\"cruise\", \"longitudinal\"], procedural = 1, episodes = 2, \
+                 reference_episodes = { longitudinal = 5 } }",
+                1,
+            )
+            .replacen("max_rms_m = 100.0 }", "max_rms_m = 100.0, reference_max_rms_m = { longitudinal = 0.3 } }", 1);
+        let c = CurriculumConfig::from_toml(&text, "own.toml").unwrap();
+        assert_eq!(c.stages[1].gate.reference_max_rms_m.get("longitudinal"), Some(&0.3));
+        assert_eq!(CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap(), c, "the saved run reads back");
+        let task = c.stage_train_config(2).unwrap().task;
+        let set = crate::validation::ValidationSet::new(&c.stages[1].validation, &task, 0.004, 7).unwrap();
+        let starts: Vec<(String, usize)> = set.entries.iter().map(|e| (e.name.clone(), e.episodes)).collect();
+        let expected = [("cruise", 2), ("longitudinal", 5), ("procedural-1", 2)].map(|(n, k)| (n.to_owned(), k));
+        assert_eq!(starts, expected, "longitudinal from its own 5 starts, the rest from the stage's 2");
+        let plain = CurriculumConfig::from_toml(TINY, "tiny.toml").unwrap();
+        assert!(!plain.to_toml().contains("reference_"), "runs saved without the new keys read as before");
     }
 }

@@ -210,7 +210,7 @@ fn run_stage(
         let shared = Arc::new(Mutex::new((selection, Vec::<Validated>::new())));
         let hook_state = shared.clone();
         let (hook_robot, hook_names, hook_path, hook_gate) =
-            (robot.clone(), names.clone(), selection_path.clone(), stage.gate);
+            (robot.clone(), names.clone(), selection_path.clone(), stage.gate.clone());
         trainer.add_checkpoint_hook(Box::new(move |event| {
             let path = checkpoint_path(event.dir, event.iteration);
             let env_steps = event.history.last().map_or(0, |l| l.env_steps);
@@ -223,7 +223,7 @@ fn run_stage(
             state.1.push(row);
             Ok(())
         }));
-        let gate = stage.gate;
+        let gate = stage.gate.clone();
         trainer.run(&mut |log, _| {
             progress(Progress::Iteration { stage: number, log });
             let mut state = shared.lock().expect("no panic while holding the selection");
@@ -292,10 +292,11 @@ fn select(
             gate: describe_gate(&stage.gate),
             iterations,
             best: format!(
-                "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}",
+                "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}{}",
                 best.map_or(0, |b| b.iteration),
                 best.map_or(0.0, |b| b.score.completed_percent),
                 best.map_or(f64::NAN, |b| b.score.mean_rms_m),
+                describe_rms_bars(&stage.gate, selection),
                 describe_identified(selection)
             ),
             dir: here.to_owned(),
@@ -318,6 +319,28 @@ fn select(
     flapper_files::write_json(&selected, &outcome)
         .map_err(|e| CurriculumError::File { path: selected.clone(), message: e.to_string() })?;
     Ok(outcome)
+}
+
+/// For each entry with its own RMS bar, the smallest error any checkpoint flew it with (from the gate's
+/// `min_iterations` on), for the missed gate's message: which bar held the gate shut, and by how much.
+fn describe_rms_bars(gate: &Gate, selection: &Selection) -> String {
+    let closest: Vec<String> = gate
+        .reference_max_rms_m
+        .iter()
+        .map(|(name, bar)| {
+            let best = selection
+                .rows
+                .iter()
+                .filter(|r| r.iteration >= gate.min_iterations)
+                .filter_map(|r| Some((r.iteration, r.score.reference(name)?.mean_rms_m)))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            match best {
+                Some((iteration, rms)) => format!("{name} {rms:.3} m at best (iteration {iteration}; bar {bar} m)"),
+                None => format!("{name} never flown (bar {bar} m)"),
+            }
+        })
+        .collect();
+    if closest.is_empty() { String::new() } else { format!("; {}", closest.join(", ")) }
 }
 
 /// The identified checkpoints of a stage in words (x, y, z fit of each), for the missed gate's message.
@@ -352,6 +375,10 @@ pub fn describe_gate(gate: &Gate) -> String {
     }
     if let Some(rms) = gate.max_rms_m {
         text.push_str(&format!(", mean RMS error at most {rms} m"));
+    }
+    if !gate.reference_max_rms_m.is_empty() {
+        let bars: Vec<String> = gate.reference_max_rms_m.iter().map(|(name, bar)| format!("{name} {bar} m")).collect();
+        text.push_str(&format!(", mean RMS error of {}", bars.join(", ")));
     }
     if let Some(fit) = gate.identification_fit_percent {
         text.push_str(&format!(

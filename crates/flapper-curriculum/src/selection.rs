@@ -225,6 +225,8 @@ pub fn stage_wall_time_s(selection: &Selection, trained_wall_time_s: f64, last_i
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeMap;
+
     use super::*;
 
     fn row(iteration: usize, completed: usize, rms: f64) -> Validated {
@@ -260,13 +262,14 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: Some(0.35),
+            reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
             min_iterations: 0,
         };
         assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
-        let later = Gate { min_iterations: 35, ..gate };
+        let later = Gate { min_iterations: 35, ..gate.clone() };
         assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
-        let identified = Gate { identification_fit_percent: Some(80.0), max_rms_m: None, ..gate };
+        let identified = Gate { identification_fit_percent: Some(80.0), max_rms_m: None, ..gate.clone() };
         let mut with_fits = Selection { identified: true, ..selection.clone() };
         assert!(with_fits.best_meeting(&identified).is_none(), "flown well, not identified: not eligible");
         with_fits.rows[2].identification_fit_percent = Some([85.0, 79.0, 90.0]);

@@ -90,8 +90,8 @@ impl ValidationSet {
         }
         let nominal = references.into_iter().map(|reference| ValidationEntry {
             name: reference.name().to_owned(),
+            episodes: config.episodes_of(reference.name()),
             reference,
-            episodes: config.episodes,
             randomization: None,
         });
         Ok(Self { entries: nominal.chain(randomized).collect(), seed })
@@ -204,12 +204,24 @@ impl Score {
                 (drawn().map(|r| r.completed).sum::<usize>(), drawn().map(|r| r.episodes).sum::<usize>());
             episodes == 0 || 100.0 * completed as f64 / episodes as f64 >= bar
         });
-        each && procedural && gate.max_rms_m.is_none_or(|max| self.mean_rms_m <= max)
+        each && procedural && gate.max_rms_m.is_none_or(|max| self.mean_rms_m <= max) && self.rms_bars_met(gate)
+    }
+
+    /// Whether every entry with its own RMS bar (`gate.reference_max_rms_m`) flew within it; an entry
+    /// the validation set does not have cannot meet its bar.
+    pub fn rms_bars_met(&self, gate: &Gate) -> bool {
+        gate.reference_max_rms_m.iter().all(|(name, max)| self.reference(name).is_some_and(|r| r.mean_rms_m <= *max))
+    }
+
+    pub fn reference(&self, name: &str) -> Option<&ReferenceScore> {
+        self.references.iter().find(|r| r.name == name)
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeMap;
+
     use super::*;
 
     fn score(per_reference: &[(usize, usize, f64)]) -> Score {
@@ -250,13 +262,37 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: Some(0.5),
+            reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(score(&[(10, 10, 0.3), (9, 10, 0.4)]).meets(&gate));
         assert!(!score(&[(10, 10, 0.3), (8, 10, 0.4)]).meets(&gate), "one reference below the bar");
         assert!(!score(&[(10, 10, 0.6), (10, 10, 0.6)]).meets(&gate), "the error above its bar");
-        assert!(score(&[(10, 10, 3.0)]).meets(&Gate { max_rms_m: None, ..gate }));
+        assert!(score(&[(10, 10, 3.0)]).meets(&Gate { max_rms_m: None, ..gate.clone() }));
+    }
+
+    #[test]
+    fn an_entry_with_its_own_rms_bar_is_judged_on_its_own_error() {
+        let flown = Score::of(
+            [("cruise", 0.1), ("longitudinal", 0.39), ("lateral~table3", 0.8)]
+                .map(|(name, mean_rms_m)| ReferenceScore { name: name.into(), completed: 10, episodes: 10, mean_rms_m })
+                .to_vec(),
+        );
+        let bars = |bars: &[(&str, f64)]| Gate {
+            completed_percent: 90.0,
+            procedural_completed_percent: None,
+            randomized_completed_percent: None,
+            max_rms_m: Some(0.45),
+            reference_max_rms_m: bars.iter().map(|&(name, bar)| (name.to_owned(), bar)).collect(),
+            identification_fit_percent: None,
+            min_iterations: 0,
+        };
+        assert!(flown.mean_rms_m <= 0.45 && flown.meets(&bars(&[])), "the mean over the entries is within its bar");
+        assert!(!flown.meets(&bars(&[("longitudinal", 0.3)])), "0.39 m on longitudinal misses its 0.3 m bar");
+        assert!(flown.meets(&bars(&[("longitudinal", 0.4), ("cruise", 0.3)])));
+        assert!(flown.meets(&bars(&[("lateral~table3", 0.8)])), "a randomized entry's bar, met at equality");
+        assert!(!flown.meets(&bars(&[("loop", 1.0)])), "an entry the set lacks cannot meet its bar");
     }
 
     #[test]
@@ -269,13 +305,14 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: None,
+            reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&each), "without the group bar every drawn path is judged alone");
-        let group = Gate { procedural_completed_percent: Some(65.0), ..each };
+        let group = Gate { procedural_completed_percent: Some(65.0), ..each.clone() };
         assert!(flown.meets(&group), "13 of 20 drawn episodes meet a 65% group bar");
-        assert!(!flown.meets(&Gate { procedural_completed_percent: Some(70.0), ..each }));
+        assert!(!flown.meets(&Gate { procedural_completed_percent: Some(70.0), ..each.clone() }));
         let named_missed = named_score(&names, &[(8, 10, 0.3), (10, 10, 0.3), (10, 10, 0.3)]);
         assert!(!named_missed.meets(&group), "the group bar never excuses a named reference");
         assert!(flown.references[1].is_procedural() && !flown.references[0].is_procedural());
@@ -291,14 +328,15 @@ mod tests {
             procedural_completed_percent: None,
             randomized_completed_percent: None,
             max_rms_m: None,
+            reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&gate), "without their own bar randomized entries meet the nominal one");
-        assert!(flown.meets(&Gate { randomized_completed_percent: Some(80.0), ..gate }));
-        assert!(!flown.meets(&Gate { randomized_completed_percent: Some(85.0), ..gate }), "8/10 is below 85%");
+        assert!(flown.meets(&Gate { randomized_completed_percent: Some(80.0), ..gate.clone() }));
+        assert!(!flown.meets(&Gate { randomized_completed_percent: Some(85.0), ..gate.clone() }), "8/10 is below 85%");
         let nominal_missed = named_score(&names, &[(9, 10, 0.2), (10, 10, 0.4), (10, 10, 0.5)]);
-        assert!(!nominal_missed.meets(&Gate { randomized_completed_percent: Some(0.0), ..gate }));
+        assert!(!nominal_missed.meets(&Gate { randomized_completed_percent: Some(0.0), ..gate.clone() }));
         let robust = named_score(&names, &[(10, 10, 0.2), (10, 10, 0.4), (10, 10, 0.5)]);
         assert!(robust.beats(&flown), "the randomized flights rank checkpoints too");
     }

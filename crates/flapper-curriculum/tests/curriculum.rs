@@ -195,6 +195,30 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+#[test]
+fn a_reference_held_to_its_own_rms_bar_holds_the_gate_shut_and_the_message_says_by_how_much() {
+    let dir = scratch("rms-bar");
+    let validation = "validation = { references = [\"cruise\"], episodes = 2 }";
+    let own = "validation = { references = [\"cruise\", \"longitudinal\"], episodes = 2, reference_episodes = { cruise = 3 } }";
+    let gate = "gate = { completed_percent = 0, reference_max_rms_m = { longitudinal = 0.001 } }";
+    let text = TINY.replacen(validation, own, 1).replacen("gate = { completed_percent = 0 }", gate, 1);
+    let e = run(&dir, &text, None).unwrap_err();
+    assert!(
+        e.contains("stage 1 ('cruise') missed its gate") && e.contains("mean RMS error of longitudinal 0.001 m"),
+        "{e}"
+    );
+    assert!(e.contains("longitudinal") && e.contains("m at best (iteration ") && e.contains("bar 0.001 m"), "{e}");
+    let table = std::fs::read_to_string(stage_dir(&dir, 1).join("selection.csv")).unwrap();
+    let header: Vec<&str> = table.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for row in table.lines().skip(1) {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(cells[column("cruise_episodes")], "3", "cruise from its own 3 starts: {table}");
+        assert_eq!(cells[column("longitudinal_episodes")], "2", "{table}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap() {
