@@ -7,6 +7,7 @@
 pub mod config;
 pub mod figure;
 pub mod identification;
+pub mod machine;
 pub mod run;
 pub mod selection;
 pub mod summary;

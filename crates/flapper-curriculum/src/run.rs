@@ -314,6 +314,7 @@ fn select(
         validation_rms_m: best.score.mean_rms_m,
         checkpoint,
         identification_met,
+        cpu: crate::machine::cpu_model(),
     };
     let selected = here.join("selected.json");
     flapper_files::write_json(&selected, &outcome)

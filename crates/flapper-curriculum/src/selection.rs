@@ -211,6 +211,10 @@ pub struct StageOutcome {
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification_met: Option<bool>,
+    /// The CPU that finished the stage ([`crate::machine::cpu_model`]): training reproduces row for row
+    /// on this CPU model, not on every one. Absent in runs recorded before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu: Option<String>,
 }
 
 /// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the
