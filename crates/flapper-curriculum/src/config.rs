@@ -110,9 +110,7 @@ impl ValidationConfig {
     /// `<reference>~<name>` for each randomized one (the procedural ones are drawn later).
     pub fn entry_names(&self) -> Vec<String> {
         let randomized = self.randomized.iter().flat_map(|r| {
-            r.references
-                .iter()
-                .map(move |reference| format!("{reference}{}{}", crate::validation::RANDOMIZED_SEPARATOR, r.name))
+            r.references.iter().map(|reference| crate::validation::randomized_entry_name(reference, &r.name))
         });
         self.references.iter().cloned().chain(randomized).collect()
     }

@@ -38,6 +38,11 @@ pub const PROCEDURAL_PREFIX: &str = "procedural-";
 /// Between a reference's name and its randomization's in a randomized entry: `lateral~table3`.
 pub const RANDOMIZED_SEPARATOR: char = '~';
 
+/// The name of `reference` flown under the randomization named `setting`: `lateral~table3`.
+pub fn randomized_entry_name(reference: &str, setting: &str) -> String {
+    format!("{reference}{RANDOMIZED_SEPARATOR}{setting}")
+}
+
 /// One line of a validation set: a reference, flown from `episodes` starts, nominal or randomized.
 pub struct ValidationEntry {
     pub name: String,
@@ -71,7 +76,7 @@ impl ValidationSet {
             for name in &setting.references {
                 let reference = Arc::new(resolve(name, dt_s, lookahead)?);
                 randomized.push(ValidationEntry {
-                    name: format!("{}{RANDOMIZED_SEPARATOR}{}", reference.name(), setting.name),
+                    name: randomized_entry_name(reference.name(), &setting.name),
                     reference,
                     episodes: setting.episodes,
                     randomization: Some(setting.flown_randomization()),
