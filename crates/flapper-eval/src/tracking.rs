@@ -127,7 +127,7 @@ pub fn energy_per_metre_j<S: std::borrow::Borrow<TrackingStep>>(steps: &[S], per
 /// The speeds along a path (m/s) the final controller is known to track: its level-flight envelope
 /// (`flapper robustness --reference longitudinal`, "envelope": completed in at least 90% of 20
 /// episodes of 15 s level flight). A path outside it may still be flown, but nothing vouches for it.
-pub const TRACKED_SPEEDS_MPS: [f64; 2] = [3.5, 8.0];
+pub const TRACKED_SPEEDS_MPS: [f64; 2] = [3.5, 7.5];
 
 /// A warning for a path that asks for speeds outside [`TRACKED_SPEEDS_MPS`], naming them.
 pub fn speed_warning(reference: &Reference) -> Option<String> {
