@@ -111,6 +111,13 @@ pub struct ReferenceConfig {
     pub sharp_turn_deg: Interval,
     /// Duration of a sharp turn (s).
     pub sharp_turn_duration_s: Interval,
+    /// Chance that a held command (not a loop or a sharp turn) flies at a speed drawn from
+    /// `slow_speed_mps` instead of `forward_speed_mps`: slow level flight, climbs and descents get their
+    /// own share of episodes while the manoeuvres keep the full speed range. 0 (the default) draws
+    /// nothing extra, so configs without it generate exactly the references they always did.
+    pub slow_probability: f64,
+    /// The slow commands' forward speeds (m/s), used where `slow_probability` > 0.
+    pub slow_speed_mps: Interval,
 }
 
 /// Paper III-E: the episode starts near the reference's start so the policy must recover and rejoin.
@@ -206,6 +213,8 @@ impl Default for ReferenceConfig {
             sharp_turn_probability: 0.0,
             sharp_turn_deg: [90.0, 180.0],
             sharp_turn_duration_s: [1.2, 2.4],
+            slow_probability: 0.0,
+            slow_speed_mps: [2.5, 3.5],
         }
     }
 }
@@ -347,6 +356,7 @@ impl TaskConfig {
             ("reference.loop_duration_s", f.loop_duration_s, 1.0, 60.0),
             ("reference.loop_probability", f.loop_probability, 0.0, 1.0),
             ("reference.sharp_turn_probability", f.sharp_turn_probability, 0.0, 1.0),
+            ("reference.slow_probability", f.slow_probability, 0.0, 1.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
@@ -383,6 +393,7 @@ impl TaskConfig {
             ("reference.yaw_rate_degps", f.yaw_rate_degps, -720.0, 720.0),
             ("reference.sharp_turn_deg", f.sharp_turn_deg, 0.0, 360.0),
             ("reference.sharp_turn_duration_s", f.sharp_turn_duration_s, 0.2, 60.0),
+            ("reference.slow_speed_mps", f.slow_speed_mps, 0.1, fastest),
         ] {
             check_interval(key, interval)?;
             if !(interval[0] >= low && interval[1] <= high) {
@@ -496,6 +507,11 @@ mod tests {
         let err =
             TaskConfig::from_toml("[episode]\nmax_position_error_m = -1.0\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("episode.max_position_error_m") && err.contains("-1"), "{err}");
+        let err = TaskConfig::from_toml("[reference]\nslow_probability = 1.5\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.slow_probability") && err.contains("1.5"), "{err}");
+        let err =
+            TaskConfig::from_toml("[reference]\nslow_speed_mps = [3.0, 2.0]\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.slow_speed_mps"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
         let err =

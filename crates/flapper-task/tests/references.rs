@@ -94,6 +94,21 @@ fn procedural_references_are_seeded_and_follow_the_stage() {
 }
 
 #[test]
+fn slow_commands_take_their_share_and_change_nothing_where_not_asked_for() {
+    let fast = ReferenceConfig { forward_speed_mps: [4.5, 5.0], ..ReferenceConfig::default() };
+    let make = |config: &ReferenceConfig| procedural(config, 60.0, 0.62, DT, &mut ChaCha8Rng::seed_from_u64(5));
+    // Probability 0 draws nothing extra: the same path whatever the slow range says.
+    assert_eq!(make(&fast), make(&ReferenceConfig { slow_speed_mps: [1.0, 1.5], ..fast.clone() }));
+    let always = ReferenceConfig { slow_probability: 1.0, slow_speed_mps: [2.5, 3.0], ..fast.clone() };
+    let [slowest, fastest] = make(&always).speed_range_mps();
+    assert!(slowest >= 2.5 - 1e-6 && fastest <= 3.0 + 1e-6, "every command slow: {slowest}..{fastest} m/s");
+    // Half the commands slow: both ranges are flown within one minute of commands.
+    let half = make(&ReferenceConfig { slow_probability: 0.5, ..always.clone() });
+    let speeds: Vec<f64> = (0..half.len() - 1).step_by(150).map(|k| half.speed(k)).collect();
+    assert!(speeds.iter().any(|&v| v < 3.05) && speeds.iter().any(|&v| v > 4.45), "{speeds:?}");
+}
+
+#[test]
 fn csv_reference_loads_and_resamples() {
     let text = "time_s,x_m,y_m,z_m\n0,0,0,10\n0.5,2,0,10\n1.0,4,0,10.5\n";
     let r = parse_reference_csv(text, "mine.csv", DT, 30).unwrap();

@@ -89,7 +89,8 @@ pub fn build(name: &str, pieces: &[Piece], start: Vec3, yaw_rad: f64, dt_s: f64)
 
 /// A seeded random reference of at least `duration_s` (plus `extra_s` to cover the lookahead) from
 /// a stage's ranges: one piece per slot, a loop with `loop_probability`, else a sharp turn with
-/// `sharp_turn_probability`, else a command held `command_duration_s`.
+/// `sharp_turn_probability`, else a command held `command_duration_s` (at a slow speed with
+/// `slow_probability`).
 pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s: f64, rng: &mut impl Rng) -> Reference {
     let mut pieces = Vec::new();
     let mut total = 0.0;
@@ -119,8 +120,10 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
                 if kind == LoopKind::BackFlip { config.loop_duration_s } else { 0.5 * config.loop_duration_s };
             Piece::Loop { kind, speed_mps: speed, duration_s }
         } else {
+            // Drawn only where asked for, so that other configs' random streams stay as they were.
+            let slow = config.slow_probability > 0.0 && rng.random_bool(config.slow_probability);
             Piece::Command {
-                forward_speed_mps: speed,
+                forward_speed_mps: if slow { uniform(rng, config.slow_speed_mps) } else { speed },
                 vertical_speed_mps: if first { 0.0 } else { uniform(rng, config.vertical_speed_mps) },
                 yaw_rate_radps: if first { 0.0 } else { uniform(rng, config.yaw_rate_degps).to_radians() },
                 duration_s: config.command_duration_s,
