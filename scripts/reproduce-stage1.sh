@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Trains the curriculum's stage 1 again with the shipped seed and compares its training.csv with the shipped
-# one (policies/final/stage1/training.csv) row for row, timing columns apart. Training is reproducible on the
-# same CPU model with the same thread count, not across CPU models (policies/final/README.md: gemm's kernels
-# and block sizes follow the CPU); about 2-3 minutes on 2 cores.
+# one (policies/final/stage1/training.csv) row for row, timing columns apart. Training is reproducible on
+# every CPU with FMA (x86-64-v3 and up, aarch64) with the same thread count (crates/flapper-ppo/src/matmul.rs
+# fixes the order of every sum); about 2-3 minutes on 2 cores.
 #   scripts/reproduce-stage1.sh [SHIPPED_DIR]   (default policies/final)
 set -euo pipefail
 shipped=${1:-policies/final}
@@ -11,7 +11,7 @@ out=$(mktemp -d)/curriculum
 trap 'rm -rf "$(dirname "$out")"' EXIT
 cargo run --release --quiet -p flapper-cli -- curriculum --out "$out" --seed "$seed" --until-stage 1
 python3 - "$shipped/stage1/training.csv" "$out/stage1/training.csv" <<'PY'
-import csv, sys
+import csv, json, os, sys
 timing = {"wall_time_s", "steps_per_s", "env_time_s", "inference_time_s", "update_time_s"}
 shipped, again = (list(csv.DictReader(open(path))) for path in sys.argv[1:3])
 if len(shipped) != len(again):
@@ -22,7 +22,8 @@ for row, (a, b) in enumerate(zip(shipped, again), start=1):
         first = open("/proc/cpuinfo").read().split("\n\n")[0].splitlines()
         info = {k.strip(): v.strip() for k, v in (l.split(":", 1) for l in first if ":" in l)}
         cpu = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}"
-        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} (this CPU: {cpu}; training "
-                 "reproduces on the CPU model it ran on, policies/final/README.md)")
+        trained = json.load(open(os.path.join(os.path.dirname(sys.argv[1]), "selected.json"))).get("cpu", "not recorded")
+        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} (this CPU: {cpu}; the shipped "
+                 f"stage 1 was trained on {trained}; training reproduces on CPUs with FMA, with the same thread count)")
 print(f"reproduce-stage1: {len(again)} rows identical to {sys.argv[1]} (timing columns apart)")
 PY
