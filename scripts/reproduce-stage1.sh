@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Trains the curriculum's stage 1 again with the shipped seed and compares its training.csv with the shipped
-# one (policies/final/stage1/training.csv) row for row, timing columns apart. Training is reproducible on
-# every CPU with FMA (x86-64-v3 and up, aarch64) with the same thread count (crates/flapper-ppo/src/matmul.rs
-# fixes the order of every sum); about 2-3 minutes on 2 cores.
+# one (policies/final/stage1/training.csv) row for row, timing columns apart. Training is reproducible on the
+# same CPU model with the same thread count, not across CPU models (policies/final/README.md: gemm's kernels
+# and block sizes follow the CPU); about 2-3 minutes on 2 cores.
 #   scripts/reproduce-stage1.sh [SHIPPED_DIR]   (default policies/final)
 set -euo pipefail
 shipped=${1:-policies/final}
@@ -24,6 +24,6 @@ for row, (a, b) in enumerate(zip(shipped, again), start=1):
         cpu = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}"
         trained = json.load(open(os.path.join(os.path.dirname(sys.argv[1]), "selected.json"))).get("cpu", "not recorded")
         sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} (this CPU: {cpu}; the shipped "
-                 f"stage 1 was trained on {trained}; training reproduces on CPUs with FMA, with the same thread count)")
+                 f"stage 1 was trained on {trained}; training reproduces on the CPU model it ran on, policies/final/README.md)")
 print(f"reproduce-stage1: {len(again)} rows identical to {sys.argv[1]} (timing columns apart)")
 PY

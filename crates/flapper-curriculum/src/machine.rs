@@ -1,7 +1,7 @@
-//! Which CPU trained a stage. Training gives the same bits on every CPU with FMA and the same thread
-//! count (`flapper_ppo::matmul` fixes the order of every sum that `gemm` would group by the CPU; before
-//! 2026-11-25 it reproduced on one CPU model only, docs/experiments.md). Each stage records its CPU in
-//! `selected.json`, so that a run that does not reproduce can be told apart by machine.
+//! Which CPU trained a stage. Training is deterministic on one CPU model but not across them: `gemm`
+//! picks its kernels and block sizes from the CPU, and the sums of the update come out grouped
+//! differently (docs/experiments.md, "training across CPU models"). Each stage records its CPU in
+//! `selected.json`, so that whoever re-runs it knows which machine reproduces it row for row.
 
 /// The CPU as `brand (family F, model M; avx512f)`: the brand string, the family and model numbers that
 /// tell its generation apart, and whether it has AVX-512 (`gemm`'s widest kernels). `None` off x86.

@@ -211,8 +211,8 @@ pub struct StageOutcome {
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification_met: Option<bool>,
-    /// The CPU that finished the stage ([`crate::machine::cpu_model`]), so that a run that does not
-    /// reproduce can be told apart by machine. Absent in runs recorded before it was kept.
+    /// The CPU that finished the stage ([`crate::machine::cpu_model`]): training reproduces row for row
+    /// on this CPU model, not on every one. Absent in runs recorded before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cpu: Option<String>,
 }

@@ -3,7 +3,7 @@
 //!
 //! - `vec_env`: the interface every batch of environments implements;
 //! - `normalizer`, `actor_critic`: the policy (observation statistics, actor, log-std, critic), built
-//!   on `mlp` (forward and backward by hand on `matmul`/gemm, the same bits on every CPU with FMA, `fast_math` for the activations);
+//!   on `mlp` (forward and backward by hand on `matmul`/gemm, `fast_math` for the activations);
 //!   `exact_inference`: the CPU-independent forward pass that flies a trained policy;
 //! - `storage`: the rollout and its generalized advantages;
 //! - `ppo`: acting, bootstrapping truncated episodes, the update (`loss`: the clipped loss and its
