@@ -14,16 +14,22 @@ python3 - "$shipped/stage1/training.csv" "$out/stage1/training.csv" <<'PY'
 import csv, json, os, sys
 timing = {"wall_time_s", "steps_per_s", "env_time_s", "inference_time_s", "update_time_s"}
 shipped, again = (list(csv.DictReader(open(path))) for path in sys.argv[1:3])
-if len(shipped) != len(again):
-    sys.exit(f"reproduce-stage1: {len(again)} rows against the shipped {len(shipped)}")
+
+
+def machines():
+    first = open("/proc/cpuinfo").read().split("\n\n")[0].splitlines()
+    info = {k.strip(): v.strip() for k, v in (l.split(":", 1) for l in first if ":" in l)}
+    here = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}, model {info.get('model', '?')}"
+    trained = json.load(open(os.path.join(os.path.dirname(sys.argv[1]), "selected.json"))).get("cpu", "not recorded")
+    return (f"this CPU: {here}; the shipped stage 1 was trained on {trained}; training reproduces on the CPU "
+            "model it ran on, policies/final/README.md")
+
+
 for row, (a, b) in enumerate(zip(shipped, again), start=1):
     differing = [k for k in a if k not in timing and a[k] != b.get(k)]
     if differing:
-        first = open("/proc/cpuinfo").read().split("\n\n")[0].splitlines()
-        info = {k.strip(): v.strip() for k, v in (l.split(":", 1) for l in first if ":" in l)}
-        cpu = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}"
-        trained = json.load(open(os.path.join(os.path.dirname(sys.argv[1]), "selected.json"))).get("cpu", "not recorded")
-        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} (this CPU: {cpu}; the shipped "
-                 f"stage 1 was trained on {trained}; training reproduces on the CPU model it ran on, policies/final/README.md)")
+        sys.exit(f"reproduce-stage1: row {row} differs in {', '.join(differing)} ({machines()})")
+if len(shipped) != len(again):
+    sys.exit(f"reproduce-stage1: {len(again)} rows against the shipped {len(shipped)} ({machines()})")
 print(f"reproduce-stage1: {len(again)} rows identical to {sys.argv[1]} (timing columns apart)")
 PY
