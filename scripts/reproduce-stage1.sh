@@ -17,11 +17,10 @@ shipped, again = (list(csv.DictReader(open(path))) for path in sys.argv[1:3])
 
 
 def machines():
-    first = open("/proc/cpuinfo").read().split("\n\n")[0].splitlines()
-    info = {k.strip(): v.strip() for k, v in (l.split(":", 1) for l in first if ":" in l)}
-    here = f"{info.get('model name', '?')}, family {info.get('cpu family', '?')}, model {info.get('model', '?')}"
-    trained = json.load(open(os.path.join(os.path.dirname(sys.argv[1]), "selected.json"))).get("cpu", "not recorded")
-    return (f"this CPU: {here}; the shipped stage 1 was trained on {trained}; training reproduces on the CPU "
+    # Each run records the CPU that trained it (`cpu` in selected.json, written by the binary).
+    here, shipped_at = (json.load(open(os.path.join(os.path.dirname(path), "selected.json"))).get("cpu", "not recorded")
+                        for path in (sys.argv[2], sys.argv[1]))
+    return (f"this CPU: {here}; the shipped stage 1 was trained on {shipped_at}; training reproduces on the CPU "
             "model it ran on, policies/final/README.md")
 
 

@@ -96,14 +96,15 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
     let mut total = 0.0;
     let uniform =
         |rng: &mut dyn rand::RngCore, [lo, hi]: [f64; 2]| if hi > lo { rng.random_range(lo..=hi) } else { lo };
+    // A chance drawn only where a config asks for it, so that configs without it keep their random streams.
+    let chance = |rng: &mut dyn rand::RngCore, probability: f64| probability > 0.0 && rng.random_bool(probability);
     let cruise_speed = uniform(rng, config.forward_speed_mps);
     // Start with one held command so the launch is straight and level-ish.
     let mut first = true;
     while total < duration_s + extra_s {
         let speed = if first { cruise_speed } else { uniform(rng, config.forward_speed_mps) };
-        let is_loop = !first && config.loop_probability > 0.0 && rng.random_bool(config.loop_probability);
-        let is_sharp_turn =
-            !first && !is_loop && config.sharp_turn_probability > 0.0 && rng.random_bool(config.sharp_turn_probability);
+        let is_loop = !first && chance(rng, config.loop_probability);
+        let is_sharp_turn = !first && !is_loop && chance(rng, config.sharp_turn_probability);
         let piece = if is_sharp_turn {
             let side = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
             let angle = uniform(rng, config.sharp_turn_deg).to_radians() * side;
@@ -120,8 +121,7 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
                 if kind == LoopKind::BackFlip { config.loop_duration_s } else { 0.5 * config.loop_duration_s };
             Piece::Loop { kind, speed_mps: speed, duration_s }
         } else {
-            // Drawn only where asked for, so that other configs' random streams stay as they were.
-            let slow = config.slow_probability > 0.0 && rng.random_bool(config.slow_probability);
+            let slow = chance(rng, config.slow_probability);
             Piece::Command {
                 forward_speed_mps: if slow { uniform(rng, config.slow_speed_mps) } else { speed },
                 vertical_speed_mps: if first { 0.0 } else { uniform(rng, config.vertical_speed_mps) },
