@@ -198,6 +198,24 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
         flapper(&["export-policy", "--checkpoint", checkpoint.to_str().unwrap(), "--out", exported.to_str().unwrap()]);
     assert_one_line_error(&again, "exists");
     assert_eq!(std::fs::read(&exported).unwrap(), before);
+    // Several checkpoints of one run: the mean of their weights; a missing one is named.
+    let averaged = dir.join("mean12.safetensors");
+    let first = run.join("checkpoints/iter_000001.safetensors");
+    let pair = [first.to_str().unwrap(), checkpoint.to_str().unwrap()];
+    let output = flapper(&["export-policy", "--checkpoint", pair[0], pair[1], "--out", averaged.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("the mean of 2 checkpoints, newest iteration 2"));
+    let missing = dir.join("iter_999.safetensors");
+    let output = flapper(&[
+        "export-policy",
+        "--checkpoint",
+        pair[0],
+        missing.to_str().unwrap(),
+        "--out",
+        dir.join("never.safetensors").to_str().unwrap(),
+    ]);
+    assert_one_line_error(&output, "iter_999.safetensors");
+    assert!(!dir.join("never.safetensors").exists());
 
     let eval_out = dir.join("eval");
     let policy = run.join("policy.safetensors");

@@ -41,6 +41,9 @@ fn default_seed() -> u64 {
     1
 }
 
+/// The most checkpoints one validation may average ([`StageConfig::average_checkpoints`]).
+pub const MAX_AVERAGED_CHECKPOINTS: usize = 100;
+
 /// One stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,6 +58,13 @@ pub struct StageConfig {
     /// A sharp policy (small std) pins the adaptive learning rate at its floor: the KL of a Gaussian
     /// grows as (change of mean / std)^2. Ignored for the first stage (`[ppo] init_noise_std`).
     pub start_noise_std: Option<f32>,
+    /// Judge and hand over, at each validation, the mean of the weights of the last this many
+    /// checkpoints of the stage (the one just saved and those before it; fewer early in the stage)
+    /// instead of the checkpoint alone: stochastic weight averaging, for a fine-tuning stage whose
+    /// neighbouring checkpoints swing (docs/training.md). Training itself goes on from the checkpoint.
+    /// Absent or 1: no averaging.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub average_checkpoints: Option<usize>,
     pub validation: ValidationConfig,
     pub gate: Gate,
     /// `[stages.runner]`, `[stages.ppo]`, `[stages.task]`: as in a `flapper train` config.
@@ -230,6 +240,13 @@ impl CurriculumConfig {
                     "gate.reference_max_rms_m: '{name}' needs a positive bar in metres, got {rms}"
                 )));
             }
+            if let Some(count) = stage.average_checkpoints
+                && !(1..=MAX_AVERAGED_CHECKPOINTS).contains(&count)
+            {
+                return Err(bad(format!(
+                    "average_checkpoints must be in [1, {MAX_AVERAGED_CHECKPOINTS}], got {count}"
+                )));
+            }
             if let Some(std) = stage.start_noise_std
                 && !(std > 0.0 && std <= 10.0)
             {
@@ -280,6 +297,11 @@ impl CurriculumConfig {
         table.insert("task".into(), toml::Value::Table(stage.task.clone()));
         let text = toml::to_string(&table).expect("a TOML table serializes");
         TrainConfig::from_toml(&text, &format!("[[stages]] {number} ('{}')", stage.name), None)
+    }
+
+    /// How many checkpoints stage `number`'s validations average (1: none).
+    pub fn averaged_checkpoints(&self, number: usize) -> usize {
+        self.stages[number - 1].average_checkpoints.unwrap_or(1)
     }
 
     pub fn stage_seed(&self, number: usize) -> u64 {
@@ -375,6 +397,13 @@ task = { stage = 2 }
         assert!(e.contains("episodes"), "{e}");
         let e = err("start_noise_std = 0.4", "start_noise_std = -1");
         assert!(e.contains("start_noise_std"), "{e}");
+        for count in [0, MAX_AVERAGED_CHECKPOINTS + 1] {
+            let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\naverage_checkpoints = {count}"));
+            assert!(
+                e.contains("stage 2") && e.contains("average_checkpoints") && e.contains(&count.to_string()),
+                "{e}"
+            );
+        }
         let e = err("[ppo]\nsteps_per_env = 8", "[ppo]\nsteps_per_env = 0");
         assert!(e.contains("ppo.steps_per_env"), "{e}");
         let e = err("seed = 3", "seed = 3\nstagez = 1");

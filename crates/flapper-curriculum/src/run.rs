@@ -183,10 +183,12 @@ fn run_stage(
     // Judge what is saved but not judged (an interruption between a checkpoint and its validation);
     // rows after the last checkpoint belong to iterations the resumed run will do again.
     selection.truncate_after(resumed_at.unwrap_or(0));
+    let averaged = config.averaged_checkpoints(number);
     for (iteration, path) in saved {
         if !selection.has(iteration) {
             let env_steps = checkpoint::load(&path)?.info.env_steps;
-            selection.rows.push(judge(robot, &set, &stage.gate, iteration, env_steps, &path)?);
+            let judged = judged_policy(&here, iteration, averaged)?;
+            selection.rows.push(judge(robot, &set, &stage.gate, iteration, env_steps, &judged)?);
         }
     }
     selection.rows.sort_by_key(|r| r.iteration);
@@ -212,8 +214,8 @@ fn run_stage(
         let (hook_robot, hook_names, hook_path, hook_gate) =
             (robot.clone(), names.clone(), selection_path.clone(), stage.gate.clone());
         trainer.add_checkpoint_hook(Box::new(move |event| {
-            let path = checkpoint_path(event.dir, event.iteration);
             let env_steps = event.history.last().map_or(0, |l| l.env_steps);
+            let path = judged_policy(event.dir, event.iteration, averaged).map_err(|e| e.to_string())?;
             let row =
                 judge(&hook_robot, &set, &hook_gate, event.iteration, env_steps, &path).map_err(|e| e.to_string())?;
             let mut state = hook_state.lock().expect("no panic while holding the selection");
@@ -236,7 +238,32 @@ fn run_stage(
         let state = shared.lock().expect("no panic while holding the selection");
         selection = state.0.clone();
     }
-    select(stage, number, &here, &selection)
+    select(stage, number, &here, &selection, averaged)
+}
+
+/// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the
+/// mean of the weights of the stage's last `averaged` checkpoints up to it
+/// ([`crate::config::StageConfig::average_checkpoints`]), written once to `averaged/` in the stage's
+/// folder (the checkpoints do not change, so a file found there is the same average).
+fn judged_policy(here: &Path, iteration: usize, averaged: usize) -> Result<PathBuf, CurriculumError> {
+    if averaged <= 1 {
+        return Ok(checkpoint_path(here, iteration));
+    }
+    let path = here.join(averaged_policy(iteration));
+    if !path.exists() {
+        let saved: Vec<PathBuf> =
+            saved_checkpoints(here).into_iter().filter(|(at, _)| *at <= iteration).map(|(_, path)| path).collect();
+        let window = &saved[saved.len().saturating_sub(averaged)..];
+        std::fs::create_dir_all(path.parent().expect("inside the stage folder"))
+            .map_err(|e| CurriculumError::File { path: path.clone(), message: e.to_string() })?;
+        checkpoint::export_average_policy(window, &path)?;
+    }
+    Ok(path)
+}
+
+/// Where an averaged policy of `iteration` lives, relative to its stage's folder.
+fn averaged_policy(iteration: usize) -> PathBuf {
+    PathBuf::from(format!("averaged/iter_{iteration:06}.safetensors"))
 }
 
 /// Flies the validation set with the checkpoint at `path` and, where the gate asks for identification
@@ -272,6 +299,7 @@ fn select(
     number: usize,
     here: &Path,
     selection: &Selection,
+    averaged: usize,
 ) -> Result<StageOutcome, CurriculumError> {
     let history = flapper_ppo::training_log::read_history(&here.join("training.csv"))
         .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
@@ -302,7 +330,11 @@ fn select(
             dir: here.to_owned(),
         });
     };
-    let checkpoint = PathBuf::from(format!("stage{number}/checkpoints/iter_{:06}.safetensors", best.iteration));
+    let checkpoint = if averaged > 1 {
+        PathBuf::from(format!("stage{number}")).join(averaged_policy(best.iteration))
+    } else {
+        PathBuf::from(format!("stage{number}/checkpoints/iter_{:06}.safetensors", best.iteration))
+    };
     let outcome = StageOutcome {
         stage: number,
         name: stage.name.clone(),

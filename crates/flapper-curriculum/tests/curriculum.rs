@@ -226,6 +226,48 @@ fn a_reference_held_to_its_own_rms_bar_holds_the_gate_shut_and_the_message_says_
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+#[test]
+fn an_averaging_stage_judges_and_hands_over_the_mean_of_its_last_checkpoints() {
+    let dir = scratch("averaged");
+    let text = TINY.replacen("start_noise_std = 0.8", "start_noise_std = 0.8\naverage_checkpoints = 3", 1);
+    assert_eq!(run(&dir, &text, None).unwrap(), 2);
+    let stage2 = stage_dir(&dir, 2);
+    let load = |path: PathBuf| flapper_ppo::checkpoint::load(&path).unwrap();
+    let checkpoint = |iteration: usize| load(stage2.join(format!("checkpoints/iter_{iteration:06}.safetensors")));
+    for iteration in 1..=4usize {
+        let averaged = load(stage2.join(format!("averaged/iter_{iteration:06}.safetensors")));
+        let window: Vec<_> = (iteration.saturating_sub(2).max(1)..=iteration).map(checkpoint).collect();
+        let newest = &window[window.len() - 1].policy;
+        for k in [0, newest.actor.params().len() / 2, newest.actor.params().len() - 1] {
+            let mean = window.iter().map(|c| c.policy.actor.params()[k] as f64).sum::<f64>() / window.len() as f64;
+            assert!(
+                (averaged.policy.actor.params()[k] as f64 - mean).abs() < 1e-6,
+                "iteration {iteration}, weight {k}"
+            );
+        }
+        if window.len() > 1 {
+            assert!(averaged.policy.actor != newest.actor, "iteration {iteration}: the mean differs from the newest");
+        }
+        assert!(averaged.policy.normalizer == newest.normalizer, "the newest checkpoint's normalizer");
+    }
+    // Stage 1 does not average: it hands over a checkpoint, and stage 2 one of its averages.
+    assert!(!stage_dir(&dir, 1).join("averaged").exists());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let handed = summary["stages"][1]["checkpoint"].as_str().unwrap();
+    assert!(handed.starts_with("stage2/averaged/iter_"), "{summary}");
+    let exported = load(dir.join("policy.safetensors"));
+    assert!(exported.policy.actor == load(dir.join(handed)).policy.actor, "the run's policy is the handed-over mean");
+    // Read back after an interruption between the stage's end and its outcome: the same choice.
+    std::fs::remove_file(stage2.join("selected.json")).unwrap();
+    std::fs::remove_file(dir.join("policy.safetensors")).unwrap();
+    assert_eq!(run(&dir, &text, None).unwrap(), 2);
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(again["stages"][1]["checkpoint"], summary["stages"][1]["checkpoint"]);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap() {

@@ -246,6 +246,62 @@ pub fn export_policy(from: &Path, to: &Path) -> Result<CheckpointInfo, Checkpoin
     Ok(info)
 }
 
+/// Writes the mean of the networks of `from` (checkpoints or policies of one run, oldest first) as a
+/// policy file at `to`, which must not exist: every weight, bias and log-std averaged (summed in the
+/// order given, in f64), the normalizer and the description of the newest. Averaging the weights of
+/// neighbouring checkpoints of a fine-tuning run smooths the checkpoint-to-checkpoint swings that a
+/// small learning rate leaves (stochastic weight averaging; docs/training.md). Files whose networks
+/// differ in layout are refused.
+pub fn export_average_policy(from: &[PathBuf], to: &Path) -> Result<CheckpointInfo, CheckpointError> {
+    if from.is_empty() {
+        return Err(CheckpointError::Format { path: to.to_owned(), message: "no checkpoint to average".into() });
+    }
+    if to.exists() {
+        return Err(CheckpointError::Exists { path: to.to_owned() });
+    }
+    let mut sums: Vec<Vec<f64>> = Vec::new();
+    let mut first: Option<(&PathBuf, ActorCritic)> = None;
+    let mut newest = None;
+    for path in from {
+        let loaded = load(path)?;
+        let policy = &loaded.policy;
+        let (first_path, reference) = first.get_or_insert_with(|| (path, policy.clone()));
+        if policy.actor.sizes() != reference.actor.sizes() || policy.critic.sizes() != reference.critic.sizes() {
+            return Err(CheckpointError::Layout {
+                path: path.clone(),
+                found: format!("an actor of {:?} and a critic of {:?}", policy.actor.sizes(), policy.critic.sizes()),
+                expected: format!(
+                    "those of '{}': {:?} and {:?}",
+                    first_path.display(),
+                    reference.actor.sizes(),
+                    reference.critic.sizes()
+                ),
+            });
+        }
+        let values = [policy.actor.params(), policy.critic.params(), &policy.log_std[..]];
+        sums.resize_with(values.len(), Vec::new);
+        for (sum, values) in sums.iter_mut().zip(values) {
+            sum.resize(values.len(), 0.0);
+            for (s, v) in sum.iter_mut().zip(values) {
+                *s += *v as f64;
+            }
+        }
+        newest = Some(loaded);
+    }
+    let newest = newest.expect("at least one file was read");
+    let count = from.len() as f64;
+    let mut policy = newest.policy;
+    let targets = [policy.actor.params_mut(), policy.critic.params_mut(), &mut policy.log_std[..]];
+    for (target, sum) in targets.into_iter().zip(&sums) {
+        for (t, s) in target.iter_mut().zip(sum) {
+            *t = (s / count) as f32;
+        }
+    }
+    let info = CheckpointInfo { kind: CheckpointKind::Policy, rng: None, ..newest.info };
+    save(to, &info, &policy, None, None)?;
+    Ok(info)
+}
+
 /// Reads a checkpoint or policy file, checking that every tensor is there with its shape.
 pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let bytes = std::fs::read(path).map_err(|source| CheckpointError::Read { path: path.to_owned(), source })?;
