@@ -246,11 +246,8 @@ fn run_stage(
 /// ([`crate::config::StageConfig::average_checkpoints`]), written once to `averaged/` in the stage's
 /// folder (the checkpoints do not change, so a file found there is the same average).
 fn judged_policy(here: &Path, iteration: usize, averaged: usize) -> Result<PathBuf, CurriculumError> {
-    if averaged <= 1 {
-        return Ok(checkpoint_path(here, iteration));
-    }
-    let path = here.join(averaged_policy(iteration));
-    if !path.exists() {
+    let path = here.join(judged_file(iteration, averaged));
+    if averaged > 1 && !path.exists() {
         let saved: Vec<PathBuf> =
             saved_checkpoints(here).into_iter().filter(|(at, _)| *at <= iteration).map(|(_, path)| path).collect();
         let window = &saved[saved.len().saturating_sub(averaged)..];
@@ -261,9 +258,14 @@ fn judged_policy(here: &Path, iteration: usize, averaged: usize) -> Result<PathB
     Ok(path)
 }
 
-/// Where an averaged policy of `iteration` lives, relative to its stage's folder.
-fn averaged_policy(iteration: usize) -> PathBuf {
-    PathBuf::from(format!("averaged/iter_{iteration:06}.safetensors"))
+/// Where the policy judged at `iteration` lives, relative to its stage's folder: the checkpoint, or
+/// its average in `averaged/`.
+fn judged_file(iteration: usize, averaged: usize) -> PathBuf {
+    if averaged > 1 {
+        PathBuf::from(format!("averaged/iter_{iteration:06}.safetensors"))
+    } else {
+        checkpoint_path(Path::new(""), iteration)
+    }
 }
 
 /// Flies the validation set with the checkpoint at `path` and, where the gate asks for identification
@@ -330,11 +332,7 @@ fn select(
             dir: here.to_owned(),
         });
     };
-    let checkpoint = if averaged > 1 {
-        PathBuf::from(format!("stage{number}")).join(averaged_policy(best.iteration))
-    } else {
-        PathBuf::from(format!("stage{number}/checkpoints/iter_{:06}.safetensors", best.iteration))
-    };
+    let checkpoint = PathBuf::from(format!("stage{number}")).join(judged_file(best.iteration, averaged));
     let outcome = StageOutcome {
         stage: number,
         name: stage.name.clone(),

@@ -260,22 +260,18 @@ pub fn export_average_policy(from: &[PathBuf], to: &Path) -> Result<CheckpointIn
         return Err(CheckpointError::Exists { path: to.to_owned() });
     }
     let mut sums: Vec<Vec<f64>> = Vec::new();
-    let mut first: Option<(&PathBuf, ActorCritic)> = None;
+    let mut first: Option<(&PathBuf, String)> = None;
     let mut newest = None;
     for path in from {
         let loaded = load(path)?;
         let policy = &loaded.policy;
-        let (first_path, reference) = first.get_or_insert_with(|| (path, policy.clone()));
-        if policy.actor.sizes() != reference.actor.sizes() || policy.critic.sizes() != reference.critic.sizes() {
+        let layout = format!("an actor of {:?} and a critic of {:?}", policy.actor.sizes(), policy.critic.sizes());
+        let (first_path, expected) = first.get_or_insert_with(|| (path, layout.clone()));
+        if layout != *expected {
             return Err(CheckpointError::Layout {
                 path: path.clone(),
-                found: format!("an actor of {:?} and a critic of {:?}", policy.actor.sizes(), policy.critic.sizes()),
-                expected: format!(
-                    "those of '{}': {:?} and {:?}",
-                    first_path.display(),
-                    reference.actor.sizes(),
-                    reference.critic.sizes()
-                ),
+                found: layout,
+                expected: format!("that of '{}': {expected}", first_path.display()),
             });
         }
         let values = [policy.actor.params(), policy.critic.params(), &policy.log_std[..]];
