@@ -46,7 +46,8 @@ def flapper(args, scratch):
 
 def spent_in_stage(stage_dir):
     """Environment steps and seconds (training and validation) a stage spent before it stopped: what a run
-    that missed the stage's gate spent there, which its summary.json does not count."""
+    that missed the stage's gate spent there, which the summary.json of a run recorded before `stopped` was
+    kept does not count (a newer summary counts it in its totals)."""
     training = stage_dir / "training.csv"
     if not training.is_file():
         return None
@@ -122,12 +123,13 @@ def main():
         }
         if not (run / "policy.safetensors").is_file():
             done = len(summary["stages"])
-            missed = spent_in_stage(run / f"stage{done + 1}")
+            missed = None if "stopped" in summary else spent_in_stage(run / f"stage{done + 1}")
             if missed:
                 row["total_env_steps"] += missed[0]
                 row["total_wall_time_s"] = round(row["total_wall_time_s"] + missed[1], 1)
             print(f"seed {row['seed']}: no controller ('{run}' finished {done} stages"
-                  + (f" and stopped in stage {done + 1}, whose steps and time are counted" if missed else "")
+                  + (f" and stopped in stage {done + 1}, whose steps and time are counted"
+                     if missed or "stopped" in summary else "")
                   + ")", flush=True)
             rows.append({**row, "nominal_bars_met": False})
             continue

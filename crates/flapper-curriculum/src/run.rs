@@ -23,7 +23,9 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::figure::write_curriculum_figure;
 use crate::identification::identification_fit_percent;
-use crate::selection::{Selection, SelectionError, StageOutcome, Validated, meets_flight_bars, stage_wall_time_s};
+use crate::selection::{
+    Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_wall_time_s,
+};
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
 
@@ -48,6 +50,8 @@ pub enum CurriculumError {
         /// The best checkpoint's iteration and score, and the identification of those identified.
         best: String,
         dir: PathBuf,
+        /// What the stage spent and reached, for `summary.json`.
+        stopped: Box<StoppedStage>,
     },
     #[error(transparent)]
     Run(#[from] RunError),
@@ -95,7 +99,13 @@ pub fn run_curriculum(
     let mut outcomes: Vec<StageOutcome> = Vec::new();
     for number in 1..=last {
         let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
-        let outcome = run_stage(robot, &config, dir, number, previous, progress)?;
+        let result = run_stage(robot, &config, dir, number, previous, progress);
+        if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
+            // The summary of a stopped run counts the stage that stopped it.
+            let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
+            summary.write(&dir.join("summary.json"))?;
+        }
+        let outcome = result?;
         progress(Progress::StageDone { outcome: &outcome });
         outcomes.push(outcome);
         Summary::new(&config, &request.command, &outcomes).write(&dir.join("summary.json"))?;
@@ -314,8 +324,22 @@ fn select(
             .filter(|_| stage.gate.identification_fit_percent.is_some())
             .map(|b| (b, Some(false))),
     };
+    let env_steps = last.map_or(0, |l| l.env_steps);
+    let wall_time_s = stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations);
     let Some((best, identification_met)) = chosen else {
         let best = selection.best();
+        let stopped = StoppedStage {
+            stage: number,
+            name: stage.name.clone(),
+            gate: describe_gate(&stage.gate),
+            iterations,
+            env_steps,
+            wall_time_s,
+            best_iteration: best.map(|b| b.iteration),
+            best_validation_score: best.map(|b| b.score.completed_percent),
+            best_validation_rms_m: best.map(|b| b.score.mean_rms_m),
+            cpu: crate::machine::cpu_model(),
+        };
         return Err(CurriculumError::GateMissed {
             stage: number,
             name: stage.name.clone(),
@@ -330,6 +354,7 @@ fn select(
                 describe_identified(selection)
             ),
             dir: here.to_owned(),
+            stopped: Box::new(stopped),
         });
     };
     let checkpoint = PathBuf::from(format!("stage{number}")).join(judged_file(best.iteration, averaged));
@@ -337,8 +362,8 @@ fn select(
         stage: number,
         name: stage.name.clone(),
         iterations,
-        env_steps: last.map_or(0, |l| l.env_steps),
-        wall_time_s: stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations),
+        env_steps,
+        wall_time_s,
         selected_iteration: best.iteration,
         validation_score: best.score.completed_percent,
         validation_rms_m: best.score.mean_rms_m,

@@ -217,6 +217,26 @@ pub struct StageOutcome {
     pub cpu: Option<String>,
 }
 
+/// A stage that missed its gate and stopped the run (`stopped` in `summary.json`): what it spent, and the
+/// best checkpoint it reached, so that a stopped run's totals count the stage that stopped it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StoppedStage {
+    pub stage: usize,
+    pub name: String,
+    /// The gate it missed, in words.
+    pub gate: String,
+    pub iterations: usize,
+    pub env_steps: u64,
+    /// Training plus validation.
+    pub wall_time_s: f64,
+    /// The best checkpoint by score (none where nothing was validated) and its completion (percent) and
+    /// mean RMS error (m).
+    pub best_iteration: Option<usize>,
+    pub best_validation_score: Option<f64>,
+    pub best_validation_rms_m: Option<f64>,
+    pub cpu: Option<String>,
+}
+
 /// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the
 /// last logged iteration) already runs through every validation done between iterations, as the
 /// checkpoint hook runs inside training; only the validations of the last logged iteration or later

@@ -1,5 +1,6 @@
 //! `summary.json`: the seed, the command, and per stage its iterations, environment steps, wall time,
-//! the checkpoint it handed over and that checkpoint's validation score; the totals.
+//! the checkpoint it handed over and that checkpoint's validation score; for a run stopped by a missed
+//! gate, that stage's spending and best score (`stopped`); the totals, the stopped stage included.
 
 use std::path::Path;
 
@@ -7,13 +8,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::CurriculumConfig;
 use crate::run::CurriculumError;
-use crate::selection::StageOutcome;
+use crate::selection::{StageOutcome, StoppedStage};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     pub seed: u64,
     pub command: String,
     pub stages: Vec<StageOutcome>,
+    /// The stage whose missed gate stopped the run; absent in a run that did not stop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<StoppedStage>,
     pub total_env_steps: u64,
     /// Training and validation of every stage (not the time a run stood interrupted).
     pub total_wall_time_s: f64,
@@ -25,9 +29,18 @@ impl Summary {
             seed: config.seed,
             command: command.to_owned(),
             stages: stages.to_vec(),
+            stopped: None,
             total_env_steps: stages.iter().map(|s| s.env_steps).sum(),
             total_wall_time_s: stages.iter().map(|s| s.wall_time_s).sum(),
         }
+    }
+
+    /// The summary of a run that `stopped` stage's missed gate ended: its steps and time join the totals.
+    pub fn stopped_at(mut self, stopped: StoppedStage) -> Self {
+        self.total_env_steps += stopped.env_steps;
+        self.total_wall_time_s += stopped.wall_time_s;
+        self.stopped = Some(stopped);
+        self
     }
 
     pub fn write(&self, path: &Path) -> Result<(), CurriculumError> {

@@ -158,6 +158,17 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
     assert!(e.contains("stage 1 ('cruise') missed its gate"), "{e}");
     assert!(e.contains("at least 100%") && e.contains("best checkpoint") && e.contains("completed 0.0%"), "{e}");
     assert!(!stage_dir(&dir, 2).exists(), "the run stopped at the missed gate");
+    // The summary counts the stage that stopped the run: its steps are in the totals.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["stages"].as_array().unwrap().len(), 0, "{summary}");
+    let stopped = &summary["stopped"];
+    assert_eq!(stopped["stage"], 1, "{summary}");
+    assert!(stopped["gate"].as_str().unwrap().contains("at least 100%"), "{summary}");
+    assert_eq!(stopped["best_validation_score"], 0.0, "{summary}");
+    let spent = stopped["env_steps"].as_u64().unwrap();
+    assert!(spent > 0 && summary["total_env_steps"] == spent, "{summary}");
+    assert!(summary["total_wall_time_s"].as_f64().unwrap() > 0.0, "{summary}");
     let again = run(&dir, &text, None).unwrap_err();
     assert_eq!(again, e, "running again reports the same, without training more");
     std::fs::remove_dir_all(dir).unwrap();
