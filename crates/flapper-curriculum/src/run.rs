@@ -343,7 +343,7 @@ fn select(
         return Err(CurriculumError::GateMissed {
             stage: number,
             name: stage.name.clone(),
-            gate: describe_gate(&stage.gate),
+            gate: stopped.gate.clone(),
             iterations,
             best: format!(
                 "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}{}",
