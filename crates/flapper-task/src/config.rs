@@ -118,6 +118,15 @@ pub struct ReferenceConfig {
     pub slow_probability: f64,
     /// The slow commands' forward speeds (m/s), used where `slow_probability` > 0.
     pub slow_speed_mps: Interval,
+    /// Chance that a held command (not a loop or a sharp turn) is a straight descent at a glide slope:
+    /// forward speed from `glide_speed_mps`, sinking at forward speed / a ratio from `glide_ratio`,
+    /// a path the robot can fly with its wings held (the shipped model glides 4.6 : 1 at 3.8 m/s,
+    /// `flapper fly --controller glide`). 0 (the default) draws nothing extra.
+    pub glide_probability: f64,
+    /// The glide commands' forward speeds (m/s), used where `glide_probability` > 0.
+    pub glide_speed_mps: Interval,
+    /// The glide commands' ratios of forward to sink speed, used where `glide_probability` > 0.
+    pub glide_ratio: Interval,
 }
 
 /// Paper III-E: the episode starts near the reference's start so the policy must recover and rejoin.
@@ -215,6 +224,9 @@ impl Default for ReferenceConfig {
             sharp_turn_duration_s: [1.2, 2.4],
             slow_probability: 0.0,
             slow_speed_mps: [2.5, 3.5],
+            glide_probability: 0.0,
+            glide_speed_mps: [3.5, 4.2],
+            glide_ratio: [4.0, 4.6],
         }
     }
 }
@@ -357,6 +369,7 @@ impl TaskConfig {
             ("reference.loop_probability", f.loop_probability, 0.0, 1.0),
             ("reference.sharp_turn_probability", f.sharp_turn_probability, 0.0, 1.0),
             ("reference.slow_probability", f.slow_probability, 0.0, 1.0),
+            ("reference.glide_probability", f.glide_probability, 0.0, 1.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
@@ -394,6 +407,8 @@ impl TaskConfig {
             ("reference.sharp_turn_deg", f.sharp_turn_deg, 0.0, 360.0),
             ("reference.sharp_turn_duration_s", f.sharp_turn_duration_s, 0.2, 60.0),
             ("reference.slow_speed_mps", f.slow_speed_mps, 0.1, fastest),
+            ("reference.glide_speed_mps", f.glide_speed_mps, 0.1, fastest),
+            ("reference.glide_ratio", f.glide_ratio, 0.5, 100.0),
         ] {
             check_interval(key, interval)?;
             if !(interval[0] >= low && interval[1] <= high) {
@@ -507,6 +522,10 @@ mod tests {
         let err =
             TaskConfig::from_toml("[episode]\nmax_position_error_m = -1.0\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("episode.max_position_error_m") && err.contains("-1"), "{err}");
+        let err = TaskConfig::from_toml("[reference]\nglide_ratio = [4.0, 0.2]\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.glide_ratio"), "{err}");
+        let err = TaskConfig::from_toml("[reference]\nglide_probability = -0.1\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.glide_probability") && err.contains("-0.1"), "{err}");
         let err = TaskConfig::from_toml("[reference]\nslow_probability = 1.5\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reference.slow_probability") && err.contains("1.5"), "{err}");
         let err =

@@ -109,6 +109,48 @@ fn slow_commands_take_their_share_and_change_nothing_where_not_asked_for() {
 }
 
 #[test]
+fn glide_commands_descend_straight_at_their_slope_and_change_nothing_where_not_asked_for() {
+    let stage3 = TaskConfig::stage(3).unwrap().reference;
+    let make = |config: &ReferenceConfig| procedural(config, 60.0, 0.62, DT, &mut ChaCha8Rng::seed_from_u64(5));
+    // Probability 0 draws nothing extra: the same path whatever the glide ranges say.
+    assert_eq!(
+        make(&stage3),
+        make(&ReferenceConfig { glide_speed_mps: [1.0, 1.5], glide_ratio: [9.0, 9.5], ..stage3.clone() })
+    );
+    let always = ReferenceConfig {
+        glide_probability: 1.0,
+        glide_speed_mps: [3.6, 4.0],
+        glide_ratio: [4.0, 4.5],
+        loop_probability: 0.0,
+        sharp_turn_probability: 0.0,
+        ..stage3.clone()
+    };
+    let r = make(&always);
+    // After the first (level) command every step descends straight ahead at a glide slope.
+    let first = (always.command_duration_s / DT) as usize + 1;
+    for k in (first..r.len() - 1).step_by(10) {
+        let step = r.target(k + 1) - r.target(k);
+        let horizontal = (step.x * step.x + step.y * step.y).sqrt();
+        let ratio = horizontal / -step.z;
+        assert!((4.0 - 1e-6..=4.5 + 1e-6).contains(&ratio), "step {k}: glide ratio {ratio}");
+        assert!((3.6 - 1e-6..=4.0 + 1e-6).contains(&(horizontal / DT)), "step {k}: {} m/s", horizontal / DT);
+        assert!(step.y.abs() < 1e-9, "step {k}: glides fly straight");
+    }
+    // A share of them: some commands glide, the others keep the stage's ranges (turns among them).
+    let some = make(&ReferenceConfig { glide_probability: 0.4, ..always.clone() });
+    let gliding = (first..some.len() - 1)
+        .step_by(150)
+        .filter(|&k| {
+            let step = some.target(k + 1) - some.target(k);
+            let ratio = (step.x * step.x + step.y * step.y).sqrt() / -step.z;
+            (4.0 - 1e-6..=4.5 + 1e-6).contains(&ratio)
+        })
+        .count();
+    let commands = (first..some.len() - 1).step_by(150).count();
+    assert!(gliding > 0 && gliding < commands, "{gliding} of {commands} commands glide");
+}
+
+#[test]
 fn csv_reference_loads_and_resamples() {
     let text = "time_s,x_m,y_m,z_m\n0,0,0,10\n0.5,2,0,10\n1.0,4,0,10.5\n";
     let r = parse_reference_csv(text, "mine.csv", DT, 30).unwrap();
