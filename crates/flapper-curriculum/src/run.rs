@@ -40,18 +40,15 @@ pub enum CurriculumError {
     #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
     Busy(PathBuf),
     #[error(
-        "stage {stage} ('{name}') missed its gate ({gate}) within {iterations} iterations; its best checkpoint, {best}. Its runs are in '{dir}'"
+        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}. Its runs are in '{dir}'",
+        .stopped.stage, .stopped.name, .stopped.gate, .stopped.iterations
     )]
     GateMissed {
-        stage: usize,
-        name: String,
-        gate: String,
-        iterations: usize,
+        /// The stage, its gate, what it spent and the best score it reached (also `stopped` in `summary.json`).
+        stopped: Box<StoppedStage>,
         /// The best checkpoint's iteration and score, and the identification of those identified.
         best: String,
         dir: PathBuf,
-        /// What the stage spent and reached, for `summary.json`.
-        stopped: Box<StoppedStage>,
     },
     #[error(transparent)]
     Run(#[from] RunError),
@@ -341,10 +338,6 @@ fn select(
             cpu: crate::machine::cpu_model(),
         };
         return Err(CurriculumError::GateMissed {
-            stage: number,
-            name: stage.name.clone(),
-            gate: stopped.gate.clone(),
-            iterations,
             best: format!(
                 "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}{}",
                 best.map_or(0, |b| b.iteration),
