@@ -185,6 +185,15 @@ pub fn evaluate_tracking_randomized(
     fly_episodes(robot, controller, config, reference, episodes, seed)
 }
 
+/// The task as `controller` flies it: the scripted gait gives joint targets, whatever actions the
+/// policy it is compared with was trained on.
+fn controller_task(controller: &TrackingController, mut config: TaskConfig) -> TaskConfig {
+    if let TrackingController::Scripted(_) = controller {
+        config.control.action_mode = flapper_task::action::ActionMode::JointTargets;
+    }
+    config
+}
+
 fn fly_episodes(
     robot: &RobotModel,
     controller: &TrackingController,
@@ -193,7 +202,7 @@ fn fly_episodes(
     episodes: usize,
     seed: u64,
 ) -> Result<Vec<EpisodeResult>, ModelError> {
-    let config = Arc::new(config);
+    let config = Arc::new(controller_task(controller, config));
     (0..episodes)
         .into_par_iter()
         .map(|k| {
@@ -223,7 +232,7 @@ pub fn record_episode(
     seed: u64,
     episode: usize,
 ) -> Result<(EpisodeResult, EpisodeTrace), ModelError> {
-    let config = Arc::new(evaluation_task(task, &reference));
+    let config = Arc::new(controller_task(controller, evaluation_task(task, &reference)));
     let env = FlightEnv::new(robot, config, ReferenceSource::Fixed(reference), seed, episode)?;
     let mut record = EpisodeTrace::default();
     let result = fly_episode(env, controller, episode, Some(&mut record));
@@ -250,7 +259,7 @@ fn fly_episode(
         },
         TrackingController::Scripted(config) => ControllerState::Scripted {
             gait: ScriptedGait::new(*config),
-            action_map: ActionMap::new(env.control().sim(), env.config().control.action_scale),
+            action_map: ActionMap::new(env.control().sim(), &env.config().control, env.control().control_period_s()),
         },
     };
     let mut action = Vec::new();

@@ -87,3 +87,24 @@ fn completion_counts_episodes_that_reach_the_end_and_manoeuvre_figures_follow_th
     assert!((m.worst_rejoin_s - 1.5).abs() < 0.03, "{m:?}");
     assert_eq!(m.never_rejoined, 0);
 }
+
+#[test]
+fn the_scripted_gait_flies_the_same_beside_a_policy_trained_on_oscillator_actions() {
+    use flapper_eval::ScriptedGaitConfig;
+    use flapper_eval::tracking::{TrackingController, evaluate_tracking};
+    let robot = RobotModel::flapper().unwrap();
+    let reference = Arc::new(named("cruise", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
+    let scripted = TrackingController::Scripted(ScriptedGaitConfig::default());
+    let joint_targets = TaskConfig::stage(1).unwrap();
+    let mut oscillator = joint_targets.clone();
+    oscillator.control.action_mode = flapper_task::action::ActionMode::FlapOscillator;
+    let fly = |task: &TaskConfig| evaluate_tracking(&robot, &scripted, task, reference.clone(), 2, 3).unwrap();
+    let (a, b) = (fly(&joint_targets), fly(&oscillator));
+    assert_eq!(a.len(), 2);
+    for (a, b) in a.iter().zip(&b) {
+        assert!(a.rms_error_m().is_finite() && a.energy_per_metre_j(0.02) > 0.0);
+        assert_eq!(a.completed(), b.completed());
+        assert_eq!(a.rms_error_m(), b.rms_error_m());
+        assert_eq!(a.energy_per_metre_j(0.02), b.energy_per_metre_j(0.02));
+    }
+}

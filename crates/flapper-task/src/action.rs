@@ -1,35 +1,132 @@
-//! Actions (paper III-C): five numbers in [-1, 1], one per actuated joint in the order q1..q5,
-//! centred on the nominal pose (wings and tail flat at 0) and scaled to each joint's limit.
-//! Out-of-range values are clipped; a non-finite value counts as 0.
+//! Actions (paper III-C): five numbers in [-1, 1]. Out-of-range values are clipped; a non-finite value
+//! counts as 0. What they ask for depends on the task's `control.action_mode`:
+//!
+//! - `joint_targets` (the paper, the default): one target per actuated joint in the order q1..q5,
+//!   centred on the nominal pose (wings and tail flat at 0) and scaled to each joint's limit.
+//! - `flap_oscillator`: the wings follow a flapping oscillator whose shape the policy sets each step,
+//!   so that holding the wings still is one output rather than a limit cycle to unlearn:
+//!
+//!   | action | asks for |
+//!   |---|---|
+//!   | a1 | flap amplitude: `max(a1, 0)` times the flap limit; any a1 <= 0 holds the wings (glide) |
+//!   | a2 | flap frequency, from `flap_frequency_hz[0]` at -1 to `[1]` at +1 |
+//!   | a3 | wing pitch (feathering) of both wings, as a joint target |
+//!   | a4 | differential wing pitch: +a4 on the left wing, -a4 on the right (roll) |
+//!   | a5 | tail pitch, as a joint target |
+//!
+//!   Both wings flap together, `A sin(phase)`; each wing's pitch also swings with the flap,
+//!   [`PITCH_SWING_PER_FLAP`] times its amplitude and leading it by a quarter cycle (the scripted
+//!   gait's shape). The phase advances by `2 pi f` times the control period at every step.
 
-use flapper_sim::{N_ACTUATED_JOINTS, Simulator};
+use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Simulator};
+use serde::{Deserialize, Serialize};
 
 /// Action size (n_j = 5).
 pub const ACTION_SIZE: usize = N_ACTUATED_JOINTS;
+
+/// Wing-pitch swing per unit of flap amplitude in `flap_oscillator` mode (the scripted gait's 10 deg
+/// for 20 deg).
+pub const PITCH_SWING_PER_FLAP: f64 = 0.5;
+
+/// What an action asks for.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActionMode {
+    /// One joint target per joint (paper III-C).
+    #[default]
+    JointTargets,
+    /// Flap amplitude, flap frequency, wing pitch, differential wing pitch, tail pitch.
+    FlapOscillator,
+}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ActionMap {
     /// Target (rad) reached by an action of +1 for each joint.
     half_range_rad: [f64; N_ACTUATED_JOINTS],
+    mode: ActionMode,
+    frequency_hz: [f64; 2],
+    control_period_s: f64,
+}
+
+/// Clips to [-1, 1]; a missing or non-finite number is 0.
+fn clipped(action: &[f32], i: usize) -> f64 {
+    let a = action.get(i).copied().unwrap_or(0.0) as f64;
+    if a.is_finite() { a.clamp(-1.0, 1.0) } else { 0.0 }
 }
 
 impl ActionMap {
     /// Scales to `action_scale` times each joint's limit (symmetric ranges: the nominal pose is 0).
-    pub fn new(sim: &Simulator, action_scale: f64) -> Self {
+    pub fn new(sim: &Simulator, control: &crate::config::ControlConfig, control_period_s: f64) -> Self {
         let ranges = sim.joint_ranges();
-        Self { half_range_rad: ranges.map(|[low, high]| action_scale * high.min(-low)) }
+        Self {
+            half_range_rad: ranges.map(|[low, high]| control.action_scale * high.min(-low)),
+            mode: control.action_mode,
+            frequency_hz: control.flap_frequency_hz,
+            control_period_s,
+        }
     }
 
-    /// Joint targets (rad) for an action.
-    pub fn to_targets(&self, action: &[f32]) -> [f64; N_ACTUATED_JOINTS] {
-        std::array::from_fn(|i| {
-            let a = action.get(i).copied().unwrap_or(0.0) as f64;
-            let a = if a.is_finite() { a.clamp(-1.0, 1.0) } else { 0.0 };
-            a * self.half_range_rad[i]
-        })
+    pub fn mode(&self) -> ActionMode {
+        self.mode
     }
 
-    /// The action that asks for `targets_rad` (inverse of `to_targets` inside the range).
+    /// Joint targets (rad) for an action. `flap_phase_rad` is the oscillator's phase, which this
+    /// advances (`flap_oscillator`; untouched in `joint_targets` mode).
+    pub fn to_targets(&self, action: &[f32], flap_phase_rad: &mut f64) -> [f64; N_ACTUATED_JOINTS] {
+        let a: [f64; N_ACTUATED_JOINTS] = std::array::from_fn(|i| clipped(action, i));
+        match self.mode {
+            ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
+            ActionMode::FlapOscillator => {
+                let [amplitude, frequency, pitch, differential, tail] = a;
+                let [low_hz, high_hz] = self.frequency_hz;
+                let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);
+                *flap_phase_rad = (*flap_phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
+                    % std::f64::consts::TAU;
+                let flap_half_range = self.half_range_rad[ActuatedJoint::FlapLeft.index()];
+                let pitch_half_range = self.half_range_rad[ActuatedJoint::PitchLeft.index()];
+                let flap = amplitude.max(0.0) * flap_half_range * flap_phase_rad.sin();
+                let swing = PITCH_SWING_PER_FLAP * amplitude.max(0.0) * flap_half_range * flap_phase_rad.cos();
+                let wing_pitch = |side: f64| {
+                    ((pitch + side * differential) * pitch_half_range + swing)
+                        .clamp(-pitch_half_range, pitch_half_range)
+                };
+                [
+                    flap,
+                    wing_pitch(1.0),
+                    flap,
+                    wing_pitch(-1.0),
+                    tail * self.half_range_rad[ActuatedJoint::TailPitch.index()],
+                ]
+            }
+        }
+    }
+
+    /// The action recorded as "previous action" after `action` asked for `targets_rad`: the joint
+    /// targets as actions (`joint_targets`), or the clipped action itself (`flap_oscillator`).
+    pub fn applied(&self, action: &[f32], targets_rad: &[f64; N_ACTUATED_JOINTS]) -> [f32; N_ACTUATED_JOINTS] {
+        match self.mode {
+            ActionMode::JointTargets => self.to_action(targets_rad),
+            ActionMode::FlapOscillator => std::array::from_fn(|i| clipped(action, i) as f32),
+        }
+    }
+
+    /// The "previous action" of a robot at rest in `joint_positions_rad` at an episode's start: the
+    /// joint-target action that holds them (`joint_targets`), or held wings with their pitch and
+    /// the tail where they are (`flap_oscillator`).
+    pub fn at_rest(&self, joint_positions_rad: &[f64; N_ACTUATED_JOINTS]) -> [f32; N_ACTUATED_JOINTS] {
+        let joint_action = self.to_action(joint_positions_rad);
+        match self.mode {
+            ActionMode::JointTargets => joint_action,
+            ActionMode::FlapOscillator => {
+                let (left, right) =
+                    (joint_action[ActuatedJoint::PitchLeft.index()], joint_action[ActuatedJoint::PitchRight.index()]);
+                [0.0, 0.0, 0.5 * (left + right), 0.5 * (left - right), joint_action[ActuatedJoint::TailPitch.index()]]
+            }
+        }
+    }
+
+    /// The joint-target action that asks for `targets_rad` (inverse of `to_targets` in `joint_targets`
+    /// mode, inside the range).
     pub fn to_action(&self, targets_rad: &[f64; N_ACTUATED_JOINTS]) -> [f32; N_ACTUATED_JOINTS] {
         std::array::from_fn(|i| (targets_rad[i] / self.half_range_rad[i]).clamp(-1.0, 1.0) as f32)
     }

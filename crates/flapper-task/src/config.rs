@@ -49,6 +49,11 @@ pub struct ControlConfig {
     pub filter_cutoff_hz: f64,
     /// Fraction of each joint's limit that an action of +-1 reaches.
     pub action_scale: f64,
+    /// What the five action numbers mean: joint targets (the paper) or a flapping oscillator's
+    /// amplitude, frequency and biases ([`crate::action::ActionMode`]).
+    pub action_mode: crate::action::ActionMode,
+    /// The oscillator's frequency range (Hz), from an action of -1 to +1 (`flap_oscillator` only).
+    pub flap_frequency_hz: [f64; 2],
 }
 
 /// Paper III-C: 25 frames of history (0.5 s) and 30 reference points ahead (0.6 s).
@@ -178,7 +183,13 @@ impl Default for TaskConfig {
 
 impl Default for ControlConfig {
     fn default() -> Self {
-        Self { substeps: 5, filter_cutoff_hz: 7.0, action_scale: 1.0 }
+        Self {
+            substeps: 5,
+            filter_cutoff_hz: 7.0,
+            action_scale: 1.0,
+            action_mode: crate::action::ActionMode::JointTargets,
+            flap_frequency_hz: [3.0, 8.0],
+        }
     }
 }
 
@@ -330,7 +341,7 @@ impl TaskConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.check_counts()?;
         self.check_scalars()?;
-        self.check_reference_intervals()?;
+        self.check_intervals()?;
         self.check_randomization()
     }
 
@@ -396,8 +407,9 @@ impl TaskConfig {
         Ok(())
     }
 
-    /// The reference generator's intervals: ordered, finite, and within their range.
-    fn check_reference_intervals(&self) -> Result<(), ConfigError> {
+    /// The intervals (the reference generator's and the oscillator's frequencies): ordered, finite, and
+    /// within their range.
+    fn check_intervals(&self) -> Result<(), ConfigError> {
         let f = &self.reference;
         let fastest = crate::reference::csv_file::MAX_REFERENCE_SPEED_MPS;
         for (key, interval, low, high) in [
@@ -409,6 +421,7 @@ impl TaskConfig {
             ("reference.slow_speed_mps", f.slow_speed_mps, 0.1, fastest),
             ("reference.glide_speed_mps", f.glide_speed_mps, 0.1, fastest),
             ("reference.glide_ratio", f.glide_ratio, 0.5, 100.0),
+            ("control.flap_frequency_hz", self.control.flap_frequency_hz, 0.1, 20.0),
         ] {
             check_interval(key, interval)?;
             if !(interval[0] >= low && interval[1] <= high) {
@@ -513,6 +526,10 @@ mod tests {
         assert_eq!(c.reward.position_weight, 0.5, "untouched keys keep the preset");
         assert_eq!(c.control.filter_cutoff_hz, 5.0);
         assert_eq!(c.reference.vertical_speed_mps, [-1.5, 1.0]);
+        assert_eq!(c.control.action_mode, crate::action::ActionMode::JointTargets, "the paper's actions by default");
+        let c = TaskConfig::from_toml("stage = 4\n[control]\naction_mode = \"flap_oscillator\"\n", "t.toml").unwrap();
+        assert_eq!(c.control.action_mode, crate::action::ActionMode::FlapOscillator);
+        assert!(c.randomization.enabled, "the stage preset stays");
     }
 
     #[test]
@@ -531,6 +548,14 @@ mod tests {
         let err =
             TaskConfig::from_toml("[reference]\nslow_speed_mps = [3.0, 2.0]\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reference.slow_speed_mps"), "{err}");
+        let err = TaskConfig::from_toml("[control]\naction_mode = \"flapping\"\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("bad.toml") && err.contains("flapping") && err.contains("flap_oscillator"), "{err}");
+        let err =
+            TaskConfig::from_toml("[control]\nflap_frequency_hz = [8.0, 3.0]\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("control.flap_frequency_hz"), "{err}");
+        let err =
+            TaskConfig::from_toml("[control]\nflap_frequency_hz = [0.0, 3.0]\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("control.flap_frequency_hz"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
         let err =

@@ -60,6 +60,9 @@ pub struct EnvSnapshot {
     step: usize,
     time_limit_steps: usize,
     previous_action: [f32; ACTION_SIZE],
+    /// The flapping oscillator's phase (`flap_oscillator` actions; 0 in snapshots from before it).
+    #[serde(default)]
+    flap_phase_rad: f64,
     episode_return: f64,
     term_sums: RewardTerms,
 }
@@ -94,6 +97,8 @@ pub struct FlightEnv {
     /// shortened by [`FlightEnv::shorten_episode`].
     time_limit_steps: usize,
     previous_action: [f32; ACTION_SIZE],
+    /// Phase of the flapping oscillator (rad; `flap_oscillator` actions only).
+    flap_phase_rad: f64,
     episode_return: f64,
     term_sums: RewardTerms,
     drawn: DrawnDynamics,
@@ -109,8 +114,8 @@ impl FlightEnv {
         index: usize,
     ) -> Result<Self, ModelError> {
         let sim = robot.instantiate()?;
-        let actions = ActionMap::new(&sim, config.control.action_scale);
         let control = ControlLoop::new(sim, config.control);
+        let actions = ActionMap::new(control.sim(), &config.control, control.control_period_s());
         let layout = ObservationLayout::of(&config.observation);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);
@@ -129,6 +134,7 @@ impl FlightEnv {
             step: 0,
             time_limit_steps: 0,
             previous_action: [0.0; ACTION_SIZE],
+            flap_phase_rad: 0.0,
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
             drawn: DrawnDynamics::default(),
@@ -175,7 +181,8 @@ impl FlightEnv {
         let initial = self.draw_initial_state();
         self.control.reset(&initial);
         self.step = 0;
-        self.previous_action = self.actions.to_action(&initial.joint_positions_rad);
+        self.previous_action = self.actions.at_rest(&initial.joint_positions_rad);
+        self.flap_phase_rad = 0.0;
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
@@ -206,10 +213,10 @@ impl FlightEnv {
 
     /// Applies `action` for one control step. Does not reset: when `end` is set, call `reset`.
     pub fn step(&mut self, action: &[f32]) -> StepResult {
-        let targets = self.actions.to_targets(action);
+        let targets = self.actions.to_targets(action, &mut self.flap_phase_rad);
         let fault = self.control.step(&targets).err();
         self.step += 1;
-        self.previous_action = self.actions.to_action(&targets);
+        self.previous_action = self.actions.applied(action, &targets);
         let sim = self.control.sim();
         let position = sim.base_position_m();
         let [roll, pitch, _] = quat_to_euler(sim.orientation());
@@ -263,6 +270,7 @@ impl FlightEnv {
             step: self.step,
             time_limit_steps: self.time_limit_steps,
             previous_action: self.previous_action,
+            flap_phase_rad: self.flap_phase_rad,
             episode_return: self.episode_return,
             term_sums: self.term_sums,
         }
@@ -289,6 +297,7 @@ impl FlightEnv {
         self.step = snapshot.step;
         self.time_limit_steps = snapshot.time_limit_steps;
         self.previous_action = snapshot.previous_action;
+        self.flap_phase_rad = snapshot.flap_phase_rad;
         self.episode_return = snapshot.episode_return;
         self.term_sums = snapshot.term_sums;
         Ok(())

@@ -320,7 +320,17 @@ fn fly(envs: &mut FlightVecEnv, steps: usize, from: usize) -> (Vec<f32>, Vec<(us
 #[test]
 fn a_snapshot_continues_every_episode_bit_for_bit() {
     // Stage 4: procedural references, randomized dynamics and wind, all redrawn from the snapshot.
-    let config = TaskConfig::stage(4).unwrap();
+    snapshot_continues(TaskConfig::stage(4).unwrap());
+}
+
+#[test]
+fn a_snapshot_continues_the_flapping_oscillator_in_its_phase() {
+    let mut config = TaskConfig::stage(4).unwrap();
+    config.control.action_mode = flapper_task::action::ActionMode::FlapOscillator;
+    snapshot_continues(config);
+}
+
+fn snapshot_continues(config: TaskConfig) {
     let mut original = FlightVecEnv::new(&robot(), config.clone(), ReferenceSource::Procedural, 5, 21, 2).unwrap();
     original.spread_first_time_limits(3);
     fly(&mut original, 37, 0);

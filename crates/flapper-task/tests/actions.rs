@@ -1,0 +1,125 @@
+//! Actions: the paper's joint targets, and the flapping oscillator in which holding the wings is one
+//! output (amplitude at or below 0), its frequency, its pitch swing a quarter cycle ahead of the flap,
+//! and its phase carried through snapshots.
+
+use std::f64::consts::TAU;
+
+use flapper_sim::{ActuatedJoint, RobotModel};
+use flapper_task::action::{ActionMap, ActionMode, PITCH_SWING_PER_FLAP};
+use flapper_task::config::{ControlConfig, TaskConfig};
+
+const PERIOD_S: f64 = 0.02;
+
+fn action_map(mode: ActionMode) -> ActionMap {
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    ActionMap::new(&sim, &ControlConfig { action_mode: mode, ..ControlConfig::default() }, PERIOD_S)
+}
+
+/// The targets of `steps` steps of one held action, and the phase after them.
+fn hold(map: &ActionMap, action: [f32; 5], steps: usize) -> (Vec<[f64; 5]>, f64) {
+    let mut phase = 0.0;
+    let targets = (0..steps).map(|_| map.to_targets(&action, &mut phase)).collect();
+    (targets, phase)
+}
+
+const FLAP: usize = ActuatedJoint::FlapLeft.index();
+const FLAP_RIGHT: usize = ActuatedJoint::FlapRight.index();
+const PITCH_LEFT: usize = ActuatedJoint::PitchLeft.index();
+const PITCH_RIGHT: usize = ActuatedJoint::PitchRight.index();
+const TAIL: usize = ActuatedJoint::TailPitch.index();
+
+#[test]
+fn joint_target_actions_scale_to_the_joint_limits_and_leave_the_phase_alone() {
+    let map = action_map(ActionMode::JointTargets);
+    let half = map.half_range_rad();
+    let (targets, phase) = hold(&map, [0.5, -1.0, 2.0, f32::NAN, -0.25], 3);
+    assert_eq!(phase, 0.0);
+    assert_eq!(targets[2], [0.5 * half[0], -half[1], half[2], 0.0, -0.25 * half[4]]);
+    assert_eq!(map.applied(&[0.5, -1.0, 2.0, f32::NAN, -0.25], &targets[2]), [0.5, -1.0, 1.0, 0.0, -0.25]);
+}
+
+#[test]
+fn an_oscillator_amplitude_at_or_below_zero_holds_the_wings_at_their_biases() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let half = map.half_range_rad();
+    for amplitude in [0.0, -0.3, -1.0] {
+        let (targets, phase) = hold(&map, [amplitude, 0.4, 0.2, 0.1, -0.4], 60);
+        assert!(phase > 0.0, "the phase runs on while the wings are held");
+        for t in &targets {
+            assert_eq!((t[FLAP], t[FLAP_RIGHT]), (0.0, 0.0));
+            assert!((t[PITCH_LEFT] - 0.3 * half[PITCH_LEFT]).abs() < 1e-6, "{t:?}");
+            assert!((t[PITCH_RIGHT] - 0.1 * half[PITCH_RIGHT]).abs() < 1e-6, "{t:?}");
+            assert!((t[TAIL] + 0.4 * half[TAIL]).abs() < 1e-6);
+        }
+    }
+}
+
+/// Upward zero crossings of the left flap target.
+fn cycles(targets: &[[f64; 5]]) -> usize {
+    targets.windows(2).filter(|w| w[0][FLAP] < 0.0 && w[1][FLAP] >= 0.0).count()
+}
+
+#[test]
+fn the_oscillator_flaps_both_wings_together_at_the_asked_frequency_and_amplitude() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let half = map.half_range_rad();
+    let [low_hz, high_hz] = ControlConfig::default().flap_frequency_hz;
+    let steps = 200; // 4 s
+    for (frequency_action, hz) in [(-1.0, low_hz), (1.0, high_hz), (0.0, 0.5 * (low_hz + high_hz))] {
+        for amplitude in [1.0f32, 0.5] {
+            let (targets, _) = hold(&map, [amplitude, frequency_action, 0.0, 0.0, 0.0], steps);
+            let expected = hz * steps as f64 * PERIOD_S;
+            assert!((cycles(&targets) as f64 - expected).abs() <= 1.0, "{hz} Hz: {} cycles", cycles(&targets));
+            let peak = targets.iter().map(|t| t[FLAP].abs()).fold(0.0, f64::max);
+            let asked = amplitude as f64 * half[FLAP];
+            assert!(peak <= asked + 1e-12 && peak > 0.9 * asked, "{hz} Hz: peak {peak}, asked {asked}");
+            assert!(targets.iter().all(|t| t[FLAP] == t[FLAP_RIGHT]));
+        }
+    }
+}
+
+#[test]
+fn the_wing_pitch_swing_leads_the_flap_by_a_quarter_cycle() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let amplitude = 0.5 * map.half_range_rad()[FLAP];
+    let swing = PITCH_SWING_PER_FLAP * amplitude;
+    let (targets, _) = hold(&map, [0.5, -0.3, 0.0, 0.0, 0.0], 150);
+    // flap = A sin(phase), pitch = S cos(phase): every step lies on the ellipse, and the pitch reaches
+    // its peak (leading edge down) as the flap crosses zero going up.
+    for t in &targets {
+        let on_ellipse = (t[FLAP] / amplitude).powi(2) + (t[PITCH_LEFT] / swing).powi(2);
+        assert!((on_ellipse - 1.0).abs() < 1e-9, "{t:?}");
+        assert_eq!(t[PITCH_LEFT], t[PITCH_RIGHT]);
+    }
+    let rising = targets.windows(2).find(|w| w[0][FLAP] < 0.0 && w[1][FLAP] >= 0.0).unwrap();
+    assert!(rising[1][PITCH_LEFT] > 0.9 * swing, "{rising:?}");
+    // The phase advances by 2 pi f per second: after one step at the middle of the range...
+    let mut phase = 0.0;
+    map.to_targets(&[0.5, 0.0, 0.0, 0.0, 0.0], &mut phase);
+    let [low_hz, high_hz] = ControlConfig::default().flap_frequency_hz;
+    assert!((phase - TAU * 0.5 * (low_hz + high_hz) * PERIOD_S).abs() < 1e-12);
+}
+
+#[test]
+fn oscillator_wing_pitch_stays_inside_its_joint_range() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let half = map.half_range_rad();
+    let (targets, _) = hold(&map, [1.0, 0.3, 1.0, 1.0, 1.0], 100);
+    assert!(
+        targets.iter().all(|t| t[PITCH_LEFT].abs() <= half[PITCH_LEFT] && t[PITCH_RIGHT].abs() <= half[PITCH_RIGHT])
+    );
+    // Full differential: the left wing at its limit, the right one flat apart from its swing.
+    assert!(targets.iter().any(|t| t[PITCH_LEFT] == half[PITCH_LEFT]));
+}
+
+#[test]
+fn the_oscillator_records_the_clipped_action_as_the_previous_action() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let mut phase = 0.0;
+    let action = [1.5, -0.2, f32::INFINITY, 0.1, -3.0];
+    let targets = map.to_targets(&action, &mut phase);
+    assert_eq!(map.applied(&action, &targets), [1.0, -0.2, 0.0, 0.1, -1.0]);
+    let at_rest = map.at_rest(&[0.3, 0.1, -0.2, -0.1, 0.05]);
+    assert_eq!(at_rest[0..2], [0.0, 0.0], "an episode starts with the wings held");
+    assert_eq!(TaskConfig::default().control.action_mode, ActionMode::JointTargets);
+}
