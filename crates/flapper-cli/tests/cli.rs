@@ -23,6 +23,9 @@ fn assert_one_line_error(output: &Output, needle: &str) {
     assert!(stderr.starts_with("error: "), "{stderr}");
     assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+    for clause in stderr.trim_end().split(": ").filter(|clause| clause.len() >= 30) {
+        assert_eq!(stderr.matches(clause).count(), 1, "'{clause}' said twice: {stderr}");
+    }
 }
 
 /// An argument error as clap reports it: exit code 2, what is wrong, and the subcommand's usage.
@@ -273,6 +276,16 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
         "ppo.lambda",
     );
     assert_one_line_error(&flapper(&["train", "--stage", "7", "--out", out.to_str().unwrap()]), "stage 7");
+    let action = dir.join("action.toml");
+    std::fs::write(&action, "[task.control]\naction_mode = \"flap_oscillator\"\nflap_amplitude_max = 9.0\n").unwrap();
+    assert_one_line_error(
+        &flapper(&["train", "--config", action.to_str().unwrap(), "--out", out.to_str().unwrap()]),
+        "control.flap_amplitude_max = 9",
+    );
+    assert_one_line_error(
+        &flapper(&["train", "--config", dir.join("absent.toml").to_str().unwrap(), "--out", out.to_str().unwrap()]),
+        "absent.toml",
+    );
     assert_one_line_error(
         &flapper(&["train", "--resume", "--out", dir.join("nothing").to_str().unwrap()]),
         "config.toml",
@@ -502,4 +515,22 @@ fn eval_writes_what_the_policy_saw_and_did() {
             pair[0][action]
         );
     }
+}
+
+#[test]
+fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key() {
+    let dir = scratch("curriculum-bad");
+    let config = dir.join("curriculum.toml");
+    std::fs::write(
+        &config,
+        "[[stages]]\nname = \"cruise\"\nmax_iterations = 10\nvalidate_every = 5\n\
+         validation = { references = [\"cruise\"], episodes = 2 }\ngate = { completed_percent = 90 }\n\
+         [stages.task.control]\naction_mode = \"flap_oscillator\"\nflap_amplitud_max = 1.5\n",
+    )
+    .unwrap();
+    let out = dir.join("run");
+    let output = flapper(&["curriculum", "--config", config.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_one_line_error(&output, "flap_amplitud_max");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("stage 1"));
+    assert!(!out.join("stage1").exists(), "a refused run trains nothing");
 }

@@ -15,8 +15,8 @@ pub enum PolicyFileError {
     Checkpoint(#[from] CheckpointError),
     #[error("config '{origin}': {message}")]
     Parse { origin: String, message: String },
-    #[error("config '{origin}', [task]: {source}")]
-    Task { origin: String, source: ConfigError },
+    #[error("config '{origin}', [task]: {}", error.detail())]
+    Task { origin: String, error: ConfigError },
 }
 
 /// A trained flight policy (a policy file or a checkpoint) and the task it was trained on, checked to
@@ -33,7 +33,7 @@ pub fn load_flight_policy(path: &Path) -> Result<(ActorCritic, TaskConfig), Poli
     };
     let text = toml::to_string(&task_table).map_err(|e| parse(e.to_string()))?;
     let task = TaskConfig::from_toml(&text, &origin)
-        .map_err(|source| PolicyFileError::Task { origin: origin.clone(), source })?;
+        .map_err(|error| PolicyFileError::Task { origin: origin.clone(), error })?;
     let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
     loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
     Ok((loaded.policy, task))

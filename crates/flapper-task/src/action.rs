@@ -8,13 +8,14 @@
 //!
 //!   | action | asks for |
 //!   |---|---|
-//!   | a1 | flap amplitude: `max(a1, 0)` times the flap limit; any a1 <= 0 holds the wings (glide) |
+//!   | a1 | flap amplitude: `max(a1, 0)` times `flap_amplitude_max` times the flap limit; any a1 <= 0 holds the wings (glide) |
 //!   | a2 | flap frequency, from `flap_frequency_hz[0]` at -1 to `[1]` at +1 |
 //!   | a3 | wing pitch (feathering) of both wings, as a joint target |
-//!   | a4 | differential wing pitch: +a4 on the left wing, -a4 on the right (roll) |
+//!   | a4 | roll: differential wing pitch, +a4 on the left wing and -a4 on the right, and, with `differential_flap` k, flap amplitudes A (1 - k a4) left and A (1 + k a4) right: both take lift from the left wing |
 //!   | a5 | tail pitch, as a joint target |
 //!
-//!   Both wings flap together, `A sin(phase)`; each wing's pitch also swings with the flap,
+//!   Both wings flap in phase, `A sin(phase)`, clipped to the joint limit (so an amplitude above the limit
+//!   flattens the stroke towards a square wave, as a bang-bang joint-target policy flaps); each wing's pitch also swings with the flap,
 //!   [`PITCH_SWING_PER_FLAP`] times its amplitude and leading it by a quarter cycle (the scripted
 //!   gait's shape). The phase advances by `2 pi f` times the control period at every step.
 
@@ -45,6 +46,8 @@ pub struct ActionMap {
     half_range_rad: [f64; N_ACTUATED_JOINTS],
     mode: ActionMode,
     frequency_hz: [f64; 2],
+    differential_flap: f64,
+    amplitude_max: f64,
     control_period_s: f64,
 }
 
@@ -62,6 +65,8 @@ impl ActionMap {
             half_range_rad: ranges.map(|[low, high]| control.action_scale * high.min(-low)),
             mode: control.action_mode,
             frequency_hz: control.flap_frequency_hz,
+            differential_flap: control.differential_flap,
+            amplitude_max: control.flap_amplitude_max,
             control_period_s,
         }
     }
@@ -84,19 +89,21 @@ impl ActionMap {
                     % std::f64::consts::TAU;
                 let flap_half_range = self.half_range_rad[ActuatedJoint::FlapLeft.index()];
                 let pitch_half_range = self.half_range_rad[ActuatedJoint::PitchLeft.index()];
-                let flap = amplitude.max(0.0) * flap_half_range * flap_phase_rad.sin();
-                let swing = PITCH_SWING_PER_FLAP * amplitude.max(0.0) * flap_half_range * flap_phase_rad.cos();
+                // side: +1 left, -1 right. A positive roll action pitches the left wing's leading edge down
+                // and the right one's up (less lift left, more right), and flaps the left wing less.
+                let flap_amplitude = |side: f64| {
+                    let roll = 1.0 - side * self.differential_flap * differential;
+                    amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range
+                };
+                let flap =
+                    |side: f64| (flap_amplitude(side) * flap_phase_rad.sin()).clamp(-flap_half_range, flap_half_range);
                 let wing_pitch = |side: f64| {
+                    let swing = PITCH_SWING_PER_FLAP * flap_amplitude(side) * flap_phase_rad.cos();
                     ((pitch + side * differential) * pitch_half_range + swing)
                         .clamp(-pitch_half_range, pitch_half_range)
                 };
-                [
-                    flap,
-                    wing_pitch(1.0),
-                    flap,
-                    wing_pitch(-1.0),
-                    tail * self.half_range_rad[ActuatedJoint::TailPitch.index()],
-                ]
+                let tail = tail * self.half_range_rad[ActuatedJoint::TailPitch.index()];
+                [flap(1.0), wing_pitch(1.0), flap(-1.0), wing_pitch(-1.0), tail]
             }
         }
     }

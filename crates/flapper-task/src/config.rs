@@ -23,6 +23,16 @@ pub enum ConfigError {
     UnknownStage(i64),
 }
 
+impl ConfigError {
+    /// The message without the file a parse error names, for a caller whose own message names it.
+    pub fn detail(&self) -> String {
+        match self {
+            ConfigError::Parse { message, .. } => message.clone(),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// A closed interval `[low, high]` to sample from uniformly.
 pub type Interval = [f64; 2];
 
@@ -54,6 +64,12 @@ pub struct ControlConfig {
     pub action_mode: crate::action::ActionMode,
     /// The oscillator's frequency range (Hz), from an action of -1 to +1 (`flap_oscillator` only).
     pub flap_frequency_hz: [f64; 2],
+    /// Flap amplitude difference per unit of the roll action (`flap_oscillator` only): left
+    /// A (1 - k a4), right A (1 + k a4); 0 rolls by wing pitch alone.
+    pub differential_flap: f64,
+    /// The flap amplitude of a1 = +1 as a multiple of the flap limit (`flap_oscillator` only); the
+    /// targets are clipped to the limit, so above 1 the stroke flattens towards a square wave.
+    pub flap_amplitude_max: f64,
 }
 
 /// Paper III-C: 25 frames of history (0.5 s) and 30 reference points ahead (0.6 s).
@@ -189,6 +205,8 @@ impl Default for ControlConfig {
             action_scale: 1.0,
             action_mode: crate::action::ActionMode::JointTargets,
             flap_frequency_hz: [3.0, 8.0],
+            differential_flap: 0.0,
+            flap_amplitude_max: 1.0,
         }
     }
 }
@@ -383,6 +401,8 @@ impl TaskConfig {
             ("reference.glide_probability", f.glide_probability, 0.0, 1.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
+            ("control.differential_flap", self.control.differential_flap, 0.0, 1.0),
+            ("control.flap_amplitude_max", self.control.flap_amplitude_max, 0.1, 3.0),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
             ("reward.body_rate_scale_radps", r.body_rate_scale_radps, 1e-3, 1e3),
             ("reward.level_scale_rad", r.level_scale_rad, 1e-3, 1e3),
@@ -556,6 +576,8 @@ mod tests {
         let err =
             TaskConfig::from_toml("[control]\nflap_frequency_hz = [0.0, 3.0]\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("control.flap_frequency_hz"), "{err}");
+        let err = TaskConfig::from_toml("[control]\ndifferential_flap = 1.5\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("control.differential_flap") && err.contains("1.5"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
         let err =

@@ -123,3 +123,49 @@ fn the_oscillator_records_the_clipped_action_as_the_previous_action() {
     assert_eq!(at_rest[0..2], [0.0, 0.0], "an episode starts with the wings held");
     assert_eq!(TaskConfig::default().control.action_mode, ActionMode::JointTargets);
 }
+
+#[test]
+fn a_roll_action_takes_lift_from_one_wing_by_its_pitch_and_with_differential_flap_by_its_amplitude() {
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    let control =
+        |k| ControlConfig { action_mode: ActionMode::FlapOscillator, differential_flap: k, ..Default::default() };
+    let peak = |targets: &[[f64; 5]], joint: usize| targets.iter().map(|t| t[joint].abs()).fold(0.0, f64::max);
+    let rolling = [0.6, 0.0, 0.0, 0.5, 0.0];
+    let (pitch_only, _) = hold(&ActionMap::new(&sim, &control(0.0), PERIOD_S), rolling, 100);
+    assert_eq!(peak(&pitch_only, FLAP), peak(&pitch_only, FLAP_RIGHT), "k = 0: the wings flap alike");
+    // Leading edge down on the left (less lift), up on the right, in the mean over the cycle.
+    let mean =
+        |targets: &[[f64; 5]], joint: usize| targets.iter().map(|t| t[joint]).sum::<f64>() / targets.len() as f64;
+    assert!(mean(&pitch_only, PITCH_LEFT) > 0.0 && mean(&pitch_only, PITCH_RIGHT) < 0.0);
+    let (both, _) = hold(&ActionMap::new(&sim, &control(0.5), PERIOD_S), rolling, 100);
+    let ratio = peak(&both, FLAP) / peak(&both, FLAP_RIGHT);
+    assert!((ratio - 0.75 / 1.25).abs() < 0.02, "left/right flap amplitude {ratio}");
+    let flap_limit = ActionMap::new(&sim, &control(1.0), PERIOD_S).half_range_rad()[FLAP];
+    let (saturated, _) = hold(&ActionMap::new(&sim, &control(1.0), PERIOD_S), [1.0, 0.0, 0.0, -1.0, 0.0], 100);
+    assert!(peak(&saturated, FLAP) <= flap_limit && peak(&saturated, FLAP_RIGHT) == 0.0);
+}
+
+#[test]
+fn an_amplitude_above_the_flap_limit_flattens_the_stroke_at_the_limit() {
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    let map = |max| {
+        let control =
+            ControlConfig { action_mode: ActionMode::FlapOscillator, flap_amplitude_max: max, ..Default::default() };
+        ActionMap::new(&sim, &control, PERIOD_S)
+    };
+    let limit = map(1.0).half_range_rad()[FLAP];
+    let at_limit = |targets: &[[f64; 5]]| targets.iter().filter(|t| t[FLAP].abs() >= limit - 1e-12).count();
+    let (sine, _) = hold(&map(1.0), [1.0, -0.3, 0.0, 0.0, 0.0], 200);
+    let (flattened, _) = hold(&map(2.0), [1.0, -0.3, 0.0, 0.0, 0.0], 200);
+    assert!(flattened.iter().all(|t| t[FLAP].abs() <= limit));
+    // |sin(phase)| >= 1/2 for two thirds of the cycle: about 133 of 200 steps sit at the limit with twice it.
+    assert!(
+        at_limit(&sine) < 10 && (120..=145).contains(&at_limit(&flattened)),
+        "{} {}",
+        at_limit(&sine),
+        at_limit(&flattened)
+    );
+    let (half, _) = hold(&map(2.0), [0.25, -0.3, 0.0, 0.0, 0.0], 200);
+    let peak = half.iter().map(|t| t[FLAP].abs()).fold(0.0, f64::max);
+    assert!(peak <= 0.5 * limit + 1e-12 && peak > 0.45 * limit, "a quarter of twice the limit: {peak}");
+}

@@ -16,8 +16,8 @@ pub enum TrainConfigError {
     Read { path: String, source: std::io::Error },
     #[error("config '{path}': {message}")]
     Parse { path: String, message: String },
-    #[error("config '{path}', [task]: {source}")]
-    Task { path: String, source: ConfigError },
+    #[error("config '{path}', [task]: {}", error.detail())]
+    Task { path: String, error: ConfigError },
     #[error("config '{path}': {source}")]
     Invalid { path: String, source: InvalidSetting },
 }
@@ -65,7 +65,7 @@ impl TrainConfig {
             task_table.insert("stage".into(), toml::Value::Integer(stage));
         }
         let task = TaskConfig::from_toml(&toml::to_string(&task_table).map_err(|e| parse(e.to_string()))?, origin)
-            .map_err(|source| TrainConfigError::Task { path: origin.to_owned(), source })?;
+            .map_err(|error| TrainConfigError::Task { path: origin.to_owned(), error })?;
         let invalid = |source| TrainConfigError::Invalid { path: origin.to_owned(), source };
         learner.ppo.validate().map_err(invalid)?;
         learner.runner.validate(&learner.ppo).map_err(invalid)?;
