@@ -10,14 +10,21 @@
 //!   |---|---|
 //!   | a1 | flap amplitude: `max(a1, 0)` times `flap_amplitude_max` times the flap limit; any a1 <= 0 holds the wings (glide) |
 //!   | a2 | flap frequency, from `flap_frequency_hz[0]` at -1 to `[1]` at +1 |
-//!   | a3 | wing pitch (feathering) of both wings, as a joint target |
+//!   | a3 | flap bias (dihedral) of both wings: the stroke's centre, as a joint target |
 //!   | a4 | roll: differential wing pitch, +a4 on the left wing and -a4 on the right, and, with `differential_flap` k, flap amplitudes A (1 - k a4) left and A (1 + k a4) right: both take lift from the left wing |
 //!   | a5 | tail pitch, as a joint target |
 //!
-//!   Both wings flap in phase, `A sin(phase)`, clipped to the joint limit (so an amplitude above the limit
-//!   flattens the stroke towards a square wave, as a bang-bang joint-target policy flaps); each wing's pitch also swings with the flap,
-//!   [`PITCH_SWING_PER_FLAP`] times its amplitude and leading it by a quarter cycle (the scripted
-//!   gait's shape). The phase advances by `2 pi f` times the control period at every step.
+//!   Both wings flap in phase about their bias, `bias + A sin(phase)`, clipped to the joint limit (so an
+//!   amplitude above the limit flattens the stroke towards a square wave, as a bang-bang joint-target
+//!   policy flaps); each wing's pitch swings with the flap, [`PITCH_SWING_PER_FLAP`] times its amplitude
+//!   and leading it by a quarter cycle (the scripted gait's shape), about the roll differential. A held
+//!   wing (a1 <= 0) sits at its bias with its pitch at the differential. The phase advances by `2 pi f`
+//!   times the control period at every step.
+//!
+//!   The third action is the flap bias, not a common wing pitch: the joint-target controller flies its
+//!   loops by moving the stroke's centre (flap between +6 and +57 deg over the top of the loop, -59 to
+//!   -11 deg on the way down) and a first oscillator with a common wing pitch instead learned no loop in
+//!   1100 stage-3 iterations (docs/experiments.md, "Oscillator actions").
 
 use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Simulator};
 use serde::{Deserialize, Serialize};
@@ -36,7 +43,7 @@ pub enum ActionMode {
     /// One joint target per joint (paper III-C).
     #[default]
     JointTargets,
-    /// Flap amplitude, flap frequency, wing pitch, differential wing pitch, tail pitch.
+    /// Flap amplitude, flap frequency, flap bias, roll (differential wing pitch and amplitude), tail pitch.
     FlapOscillator,
 }
 
@@ -82,7 +89,7 @@ impl ActionMap {
         match self.mode {
             ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
             ActionMode::FlapOscillator => {
-                let [amplitude, frequency, pitch, differential, tail] = a;
+                let [amplitude, frequency, bias, differential, tail] = a;
                 let [low_hz, high_hz] = self.frequency_hz;
                 let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);
                 *flap_phase_rad = (*flap_phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
@@ -95,12 +102,13 @@ impl ActionMap {
                     let roll = 1.0 - side * self.differential_flap * differential;
                     amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range
                 };
-                let flap =
-                    |side: f64| (flap_amplitude(side) * flap_phase_rad.sin()).clamp(-flap_half_range, flap_half_range);
+                let flap = |side: f64| {
+                    (bias * flap_half_range + flap_amplitude(side) * flap_phase_rad.sin())
+                        .clamp(-flap_half_range, flap_half_range)
+                };
                 let wing_pitch = |side: f64| {
                     let swing = PITCH_SWING_PER_FLAP * flap_amplitude(side) * flap_phase_rad.cos();
-                    ((pitch + side * differential) * pitch_half_range + swing)
-                        .clamp(-pitch_half_range, pitch_half_range)
+                    (side * differential * pitch_half_range + swing).clamp(-pitch_half_range, pitch_half_range)
                 };
                 let tail = tail * self.half_range_rad[ActuatedJoint::TailPitch.index()];
                 [flap(1.0), wing_pitch(1.0), flap(-1.0), wing_pitch(-1.0), tail]
@@ -118,16 +126,17 @@ impl ActionMap {
     }
 
     /// The "previous action" of a robot at rest in `joint_positions_rad` at an episode's start: the
-    /// joint-target action that holds them (`joint_targets`), or held wings with their pitch and
-    /// the tail where they are (`flap_oscillator`).
+    /// joint-target action that holds them (`joint_targets`), or held wings with their flap, their
+    /// pitch difference and the tail where they are (`flap_oscillator`).
     pub fn at_rest(&self, joint_positions_rad: &[f64; N_ACTUATED_JOINTS]) -> [f32; N_ACTUATED_JOINTS] {
         let joint_action = self.to_action(joint_positions_rad);
         match self.mode {
             ActionMode::JointTargets => joint_action,
             ActionMode::FlapOscillator => {
-                let (left, right) =
-                    (joint_action[ActuatedJoint::PitchLeft.index()], joint_action[ActuatedJoint::PitchRight.index()]);
-                [0.0, 0.0, 0.5 * (left + right), 0.5 * (left - right), joint_action[ActuatedJoint::TailPitch.index()]]
+                let at = |joint: ActuatedJoint| joint_action[joint.index()];
+                let bias = 0.5 * (at(ActuatedJoint::FlapLeft) + at(ActuatedJoint::FlapRight));
+                let differential = 0.5 * (at(ActuatedJoint::PitchLeft) - at(ActuatedJoint::PitchRight));
+                [0.0, 0.0, bias, differential, at(ActuatedJoint::TailPitch)]
             }
         }
     }

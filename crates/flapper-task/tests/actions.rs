@@ -46,9 +46,9 @@ fn an_oscillator_amplitude_at_or_below_zero_holds_the_wings_at_their_biases() {
         let (targets, phase) = hold(&map, [amplitude, 0.4, 0.2, 0.1, -0.4], 60);
         assert!(phase > 0.0, "the phase runs on while the wings are held");
         for t in &targets {
-            assert_eq!((t[FLAP], t[FLAP_RIGHT]), (0.0, 0.0));
-            assert!((t[PITCH_LEFT] - 0.3 * half[PITCH_LEFT]).abs() < 1e-6, "{t:?}");
-            assert!((t[PITCH_RIGHT] - 0.1 * half[PITCH_RIGHT]).abs() < 1e-6, "{t:?}");
+            assert!((t[FLAP] - 0.2 * half[FLAP]).abs() < 1e-6 && t[FLAP] == t[FLAP_RIGHT], "{t:?}");
+            assert!((t[PITCH_LEFT] - 0.1 * half[PITCH_LEFT]).abs() < 1e-6, "{t:?}");
+            assert!((t[PITCH_RIGHT] + 0.1 * half[PITCH_RIGHT]).abs() < 1e-6, "{t:?}");
             assert!((t[TAIL] + 0.4 * half[TAIL]).abs() < 1e-6);
         }
     }
@@ -113,14 +113,29 @@ fn oscillator_wing_pitch_stays_inside_its_joint_range() {
 }
 
 #[test]
+fn the_flap_bias_moves_the_centre_of_the_stroke() {
+    let map = action_map(ActionMode::FlapOscillator);
+    let half = map.half_range_rad()[FLAP];
+    // 3 Hz for 1 s: three whole cycles in 50 steps, so the mean is the centre.
+    let (targets, _) = hold(&map, [0.3, -1.0, 0.5, 0.0, 0.0], 50);
+    let mean = targets.iter().map(|t| t[FLAP]).sum::<f64>() / targets.len() as f64;
+    assert!((mean - 0.5 * half).abs() < 1e-6 * half, "{mean}");
+    let (low, high) = targets.iter().fold((f64::MAX, f64::MIN), |(l, h), t| (l.min(t[FLAP]), h.max(t[FLAP])));
+    assert!(low > 0.19 * half && high <= 0.8 * half + 1e-12, "{low} {high}");
+}
+
+#[test]
 fn the_oscillator_records_the_clipped_action_as_the_previous_action() {
     let map = action_map(ActionMode::FlapOscillator);
     let mut phase = 0.0;
     let action = [1.5, -0.2, f32::INFINITY, 0.1, -3.0];
     let targets = map.to_targets(&action, &mut phase);
     assert_eq!(map.applied(&action, &targets), [1.0, -0.2, 0.0, 0.1, -1.0]);
-    let at_rest = map.at_rest(&[0.3, 0.1, -0.2, -0.1, 0.05]);
+    let half = map.half_range_rad();
+    let at_rest = map.at_rest(&[0.3 * half[0], 0.1 * half[1], 0.1 * half[2], -0.1 * half[3], 0.05 * half[4]]);
     assert_eq!(at_rest[0..2], [0.0, 0.0], "an episode starts with the wings held");
+    let expected = [0.2, 0.1, 0.05];
+    assert!(at_rest[2..].iter().zip(expected).all(|(a, e)| (a - e).abs() < 1e-6), "{at_rest:?}");
     assert_eq!(TaskConfig::default().control.action_mode, ActionMode::JointTargets);
 }
 
