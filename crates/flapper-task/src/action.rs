@@ -19,7 +19,10 @@
 //!   policy flaps); each wing's pitch swings with the flap, [`PITCH_SWING_PER_FLAP`] times its amplitude
 //!   and leading it by a quarter cycle (the scripted gait's shape), about the roll differential. A held
 //!   wing (a1 <= 0) sits at its bias with its pitch at the differential. The phase advances by `2 pi f`
-//!   times the control period at every step.
+//!   times the control period at every step. With `flap_shape_filter_hz` above 0, the amplitude and the
+//!   bias follow a1 and a3 through a first-order low-pass filter of that cutoff, so that the stroke's
+//!   shape cannot be dithered faster than the wings flap (an unfiltered bias was jittered at 15.7 Hz,
+//!   docs/experiments.md).
 //!
 //!   The third action is the flap bias, not a common wing pitch: the joint-target controller flies its
 //!   loops by moving the stroke's centre (flap between +6 and +57 deg over the top of the loop, -59 to
@@ -47,6 +50,15 @@ pub enum ActionMode {
     FlapOscillator,
 }
 
+/// What the flapping oscillator carries from one step to the next (all 0 in `joint_targets` mode).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct OscillatorState {
+    pub phase_rad: f64,
+    /// a1 and a3 as filtered (or as last given, without the filter).
+    pub amplitude: f64,
+    pub bias: f64,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ActionMap {
     /// Target (rad) reached by an action of +1 for each joint.
@@ -55,6 +67,8 @@ pub struct ActionMap {
     frequency_hz: [f64; 2],
     differential_flap: f64,
     amplitude_max: f64,
+    /// Share of the way to a new amplitude or bias covered per step (1 without the shape filter).
+    shape_step_fraction: f64,
     control_period_s: f64,
 }
 
@@ -74,6 +88,11 @@ impl ActionMap {
             frequency_hz: control.flap_frequency_hz,
             differential_flap: control.differential_flap,
             amplitude_max: control.flap_amplitude_max,
+            shape_step_fraction: if control.flap_shape_filter_hz > 0.0 {
+                1.0 - (-std::f64::consts::TAU * control.flap_shape_filter_hz * control_period_s).exp()
+            } else {
+                1.0
+            },
             control_period_s,
         }
     }
@@ -82,18 +101,22 @@ impl ActionMap {
         self.mode
     }
 
-    /// Joint targets (rad) for an action. `flap_phase_rad` is the oscillator's phase, which this
-    /// advances (`flap_oscillator`; untouched in `joint_targets` mode).
-    pub fn to_targets(&self, action: &[f32], flap_phase_rad: &mut f64) -> [f64; N_ACTUATED_JOINTS] {
+    /// Joint targets (rad) for an action. `oscillator` is the oscillator's state, which this advances
+    /// (`flap_oscillator`; untouched in `joint_targets` mode).
+    pub fn to_targets(&self, action: &[f32], oscillator: &mut OscillatorState) -> [f64; N_ACTUATED_JOINTS] {
         let a: [f64; N_ACTUATED_JOINTS] = std::array::from_fn(|i| clipped(action, i));
         match self.mode {
             ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
             ActionMode::FlapOscillator => {
-                let [amplitude, frequency, bias, differential, tail] = a;
+                let [asked_amplitude, frequency, asked_bias, differential, tail] = a;
+                oscillator.amplitude += self.shape_step_fraction * (asked_amplitude - oscillator.amplitude);
+                oscillator.bias += self.shape_step_fraction * (asked_bias - oscillator.bias);
+                let (amplitude, bias) = (oscillator.amplitude, oscillator.bias);
                 let [low_hz, high_hz] = self.frequency_hz;
                 let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);
-                *flap_phase_rad = (*flap_phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
+                let phase = (oscillator.phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
                     % std::f64::consts::TAU;
+                oscillator.phase_rad = phase;
                 let flap_half_range = self.half_range_rad[ActuatedJoint::FlapLeft.index()];
                 let pitch_half_range = self.half_range_rad[ActuatedJoint::PitchLeft.index()];
                 // side: +1 left, -1 right. A positive roll action pitches the left wing's leading edge down
@@ -103,11 +126,11 @@ impl ActionMap {
                     amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range
                 };
                 let flap = |side: f64| {
-                    (bias * flap_half_range + flap_amplitude(side) * flap_phase_rad.sin())
+                    (bias * flap_half_range + flap_amplitude(side) * phase.sin())
                         .clamp(-flap_half_range, flap_half_range)
                 };
                 let wing_pitch = |side: f64| {
-                    let swing = PITCH_SWING_PER_FLAP * flap_amplitude(side) * flap_phase_rad.cos();
+                    let swing = PITCH_SWING_PER_FLAP * flap_amplitude(side) * phase.cos();
                     (side * differential * pitch_half_range + swing).clamp(-pitch_half_range, pitch_half_range)
                 };
                 let tail = tail * self.half_range_rad[ActuatedJoint::TailPitch.index()];

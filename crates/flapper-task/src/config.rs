@@ -70,6 +70,9 @@ pub struct ControlConfig {
     /// The flap amplitude of a1 = +1 as a multiple of the flap limit (`flap_oscillator` only); the
     /// targets are clipped to the limit, so above 1 the stroke flattens towards a square wave.
     pub flap_amplitude_max: f64,
+    /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude and bias (`flap_oscillator`
+    /// only); 0 applies them as given.
+    pub flap_shape_filter_hz: f64,
 }
 
 /// Paper III-C: 25 frames of history (0.5 s) and 30 reference points ahead (0.6 s).
@@ -207,6 +210,7 @@ impl Default for ControlConfig {
             flap_frequency_hz: [3.0, 8.0],
             differential_flap: 0.0,
             flap_amplitude_max: 1.0,
+            flap_shape_filter_hz: 0.0,
         }
     }
 }
@@ -403,6 +407,7 @@ impl TaskConfig {
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
             ("control.differential_flap", self.control.differential_flap, 0.0, 1.0),
             ("control.flap_amplitude_max", self.control.flap_amplitude_max, 0.1, 3.0),
+            ("control.flap_shape_filter_hz", self.control.flap_shape_filter_hz, 0.0, 100.0),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
             ("reward.body_rate_scale_radps", r.body_rate_scale_radps, 1e-3, 1e3),
             ("reward.level_scale_rad", r.level_scale_rad, 1e-3, 1e3),

@@ -8,7 +8,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::action::{ACTION_SIZE, ActionMap};
+use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
 use crate::config::TaskConfig;
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
@@ -60,9 +60,9 @@ pub struct EnvSnapshot {
     step: usize,
     time_limit_steps: usize,
     previous_action: [f32; ACTION_SIZE],
-    /// The flapping oscillator's phase (`flap_oscillator` actions; 0 in snapshots from before it).
+    /// The flapping oscillator (`flap_oscillator` actions; all 0 in snapshots from before it).
     #[serde(default)]
-    flap_phase_rad: f64,
+    oscillator: OscillatorState,
     episode_return: f64,
     term_sums: RewardTerms,
 }
@@ -97,8 +97,8 @@ pub struct FlightEnv {
     /// shortened by [`FlightEnv::shorten_episode`].
     time_limit_steps: usize,
     previous_action: [f32; ACTION_SIZE],
-    /// Phase of the flapping oscillator (rad; `flap_oscillator` actions only).
-    flap_phase_rad: f64,
+    /// The flapping oscillator (`flap_oscillator` actions only).
+    oscillator: OscillatorState,
     episode_return: f64,
     term_sums: RewardTerms,
     drawn: DrawnDynamics,
@@ -134,7 +134,7 @@ impl FlightEnv {
             step: 0,
             time_limit_steps: 0,
             previous_action: [0.0; ACTION_SIZE],
-            flap_phase_rad: 0.0,
+            oscillator: OscillatorState::default(),
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
             drawn: DrawnDynamics::default(),
@@ -182,7 +182,7 @@ impl FlightEnv {
         self.control.reset(&initial);
         self.step = 0;
         self.previous_action = self.actions.at_rest(&initial.joint_positions_rad);
-        self.flap_phase_rad = 0.0;
+        self.oscillator = OscillatorState { bias: self.previous_action[2] as f64, ..OscillatorState::default() };
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
@@ -213,7 +213,7 @@ impl FlightEnv {
 
     /// Applies `action` for one control step. Does not reset: when `end` is set, call `reset`.
     pub fn step(&mut self, action: &[f32]) -> StepResult {
-        let targets = self.actions.to_targets(action, &mut self.flap_phase_rad);
+        let targets = self.actions.to_targets(action, &mut self.oscillator);
         let fault = self.control.step(&targets).err();
         self.step += 1;
         self.previous_action = self.actions.applied(action, &targets);
@@ -270,7 +270,7 @@ impl FlightEnv {
             step: self.step,
             time_limit_steps: self.time_limit_steps,
             previous_action: self.previous_action,
-            flap_phase_rad: self.flap_phase_rad,
+            oscillator: self.oscillator,
             episode_return: self.episode_return,
             term_sums: self.term_sums,
         }
@@ -297,7 +297,7 @@ impl FlightEnv {
         self.step = snapshot.step;
         self.time_limit_steps = snapshot.time_limit_steps;
         self.previous_action = snapshot.previous_action;
-        self.flap_phase_rad = snapshot.flap_phase_rad;
+        self.oscillator = snapshot.oscillator;
         self.episode_return = snapshot.episode_return;
         self.term_sums = snapshot.term_sums;
         Ok(())

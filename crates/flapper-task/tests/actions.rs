@@ -5,7 +5,7 @@
 use std::f64::consts::TAU;
 
 use flapper_sim::{ActuatedJoint, RobotModel};
-use flapper_task::action::{ActionMap, ActionMode, PITCH_SWING_PER_FLAP};
+use flapper_task::action::{ActionMap, ActionMode, OscillatorState, PITCH_SWING_PER_FLAP};
 use flapper_task::config::{ControlConfig, TaskConfig};
 
 const PERIOD_S: f64 = 0.02;
@@ -17,9 +17,9 @@ fn action_map(mode: ActionMode) -> ActionMap {
 
 /// The targets of `steps` steps of one held action, and the phase after them.
 fn hold(map: &ActionMap, action: [f32; 5], steps: usize) -> (Vec<[f64; 5]>, f64) {
-    let mut phase = 0.0;
-    let targets = (0..steps).map(|_| map.to_targets(&action, &mut phase)).collect();
-    (targets, phase)
+    let mut oscillator = OscillatorState::default();
+    let targets = (0..steps).map(|_| map.to_targets(&action, &mut oscillator)).collect();
+    (targets, oscillator.phase_rad)
 }
 
 const FLAP: usize = ActuatedJoint::FlapLeft.index();
@@ -94,8 +94,9 @@ fn the_wing_pitch_swing_leads_the_flap_by_a_quarter_cycle() {
     let rising = targets.windows(2).find(|w| w[0][FLAP] < 0.0 && w[1][FLAP] >= 0.0).unwrap();
     assert!(rising[1][PITCH_LEFT] > 0.9 * swing, "{rising:?}");
     // The phase advances by 2 pi f per second: after one step at the middle of the range...
-    let mut phase = 0.0;
-    map.to_targets(&[0.5, 0.0, 0.0, 0.0, 0.0], &mut phase);
+    let mut oscillator = OscillatorState::default();
+    map.to_targets(&[0.5, 0.0, 0.0, 0.0, 0.0], &mut oscillator);
+    let phase = oscillator.phase_rad;
     let [low_hz, high_hz] = ControlConfig::default().flap_frequency_hz;
     assert!((phase - TAU * 0.5 * (low_hz + high_hz) * PERIOD_S).abs() < 1e-12);
 }
@@ -127,9 +128,8 @@ fn the_flap_bias_moves_the_centre_of_the_stroke() {
 #[test]
 fn the_oscillator_records_the_clipped_action_as_the_previous_action() {
     let map = action_map(ActionMode::FlapOscillator);
-    let mut phase = 0.0;
     let action = [1.5, -0.2, f32::INFINITY, 0.1, -3.0];
-    let targets = map.to_targets(&action, &mut phase);
+    let targets = map.to_targets(&action, &mut OscillatorState::default());
     assert_eq!(map.applied(&action, &targets), [1.0, -0.2, 0.0, 0.1, -1.0]);
     let half = map.half_range_rad();
     let at_rest = map.at_rest(&[0.3 * half[0], 0.1 * half[1], 0.1 * half[2], -0.1 * half[3], 0.05 * half[4]]);
@@ -183,4 +183,38 @@ fn an_amplitude_above_the_flap_limit_flattens_the_stroke_at_the_limit() {
     let (half, _) = hold(&map(2.0), [0.25, -0.3, 0.0, 0.0, 0.0], 200);
     let peak = half.iter().map(|t| t[FLAP].abs()).fold(0.0, f64::max);
     assert!(peak <= 0.5 * limit + 1e-12 && peak > 0.45 * limit, "a quarter of twice the limit: {peak}");
+}
+
+#[test]
+fn the_shape_filter_smooths_amplitude_and_bias_but_not_the_roll_or_tail() {
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    let control =
+        ControlConfig { action_mode: ActionMode::FlapOscillator, flap_shape_filter_hz: 2.0, ..Default::default() };
+    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let half = map.half_range_rad();
+    let mut oscillator = OscillatorState::default();
+    // A bias dithered at 25 Hz (+1, -1, ...) stays near its mean of 0; a held one gets there.
+    let mut biases = Vec::new();
+    for k in 0..100 {
+        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        let t = map.to_targets(&[-1.0, 0.0, sign, 0.3, -0.5], &mut oscillator);
+        biases.push(oscillator.bias);
+        assert!((t[TAIL] + 0.5 * half[TAIL]).abs() < 1e-6 && (t[PITCH_LEFT] - 0.3 * half[PITCH_LEFT]).abs() < 1e-6);
+    }
+    assert!(biases[10..].iter().all(|b| b.abs() < 0.15), "{:?}", &biases[..12]);
+    // After a step to 1, one time constant (1 / (2 pi 2 Hz) = 80 ms, 4 steps) covers about 63%.
+    let mut oscillator = OscillatorState::default();
+    let bias_after = |steps: usize, oscillator: &mut OscillatorState| {
+        (0..steps).for_each(|_| {
+            map.to_targets(&[-1.0, 0.0, 1.0, 0.0, 0.0], oscillator);
+        });
+        oscillator.bias
+    };
+    let early = bias_after(4, &mut oscillator);
+    assert!((0.55..0.75).contains(&early), "{early}");
+    assert!(bias_after(60, &mut oscillator) > 0.99);
+    // The amplitude too: a held wing asked to flap fully reaches the amplitude only gradually.
+    let mut oscillator = OscillatorState::default();
+    map.to_targets(&[1.0, 0.0, 0.0, 0.0, 0.0], &mut oscillator);
+    assert!(oscillator.amplitude > 0.0 && oscillator.amplitude < 0.3, "{}", oscillator.amplitude);
 }

@@ -324,9 +324,10 @@ fn a_snapshot_continues_every_episode_bit_for_bit() {
 }
 
 #[test]
-fn a_snapshot_continues_the_flapping_oscillator_in_its_phase() {
+fn a_snapshot_continues_the_flapping_oscillator_in_its_phase_and_filtered_shape() {
     let mut config = TaskConfig::stage(4).unwrap();
     config.control.action_mode = flapper_task::action::ActionMode::FlapOscillator;
+    config.control.flap_shape_filter_hz = 2.0;
     snapshot_continues(config);
 }
 
