@@ -79,7 +79,8 @@ fn clipped(action: &[f32], i: usize) -> f64 {
 }
 
 impl ActionMap {
-    /// Scales to `action_scale` times each joint's limit (symmetric ranges: the nominal pose is 0).
+    /// Scales to `action_scale` times each joint's limit (symmetric ranges: the nominal pose is 0); the
+    /// oscillator's settings come from `control` too, its phase steps by `control_period_s`.
     pub fn new(sim: &Simulator, control: &crate::config::ControlConfig, control_period_s: f64) -> Self {
         let ranges = sim.joint_ranges();
         Self {
@@ -95,10 +96,6 @@ impl ActionMap {
             },
             control_period_s,
         }
-    }
-
-    pub fn mode(&self) -> ActionMode {
-        self.mode
     }
 
     /// Joint targets (rad) for an action. `oscillator` is the oscillator's state, which this advances
@@ -161,6 +158,15 @@ impl ActionMap {
                 let differential = 0.5 * (at(ActuatedJoint::PitchLeft) - at(ActuatedJoint::PitchRight));
                 [0.0, 0.0, bias, differential, at(ActuatedJoint::TailPitch)]
             }
+        }
+    }
+
+    /// The oscillator at an episode's start, after [`ActionMap::at_rest`] gave `previous_action`: no
+    /// phase, wings held at their bias.
+    pub fn oscillator_at_rest(&self, previous_action: &[f32; N_ACTUATED_JOINTS]) -> OscillatorState {
+        match self.mode {
+            ActionMode::JointTargets => OscillatorState::default(),
+            ActionMode::FlapOscillator => OscillatorState { bias: previous_action[2] as f64, ..Default::default() },
         }
     }
 

@@ -60,7 +60,7 @@ pub struct ControlConfig {
     /// Fraction of each joint's limit that an action of +-1 reaches.
     pub action_scale: f64,
     /// What the five action numbers mean: joint targets (the paper) or a flapping oscillator's
-    /// amplitude, frequency and biases ([`crate::action::ActionMode`]).
+    /// amplitude, frequency, bias, roll and tail ([`crate::action::ActionMode`]).
     pub action_mode: crate::action::ActionMode,
     /// The oscillator's frequency range (Hz), from an action of -1 to +1 (`flap_oscillator` only).
     pub flap_frequency_hz: [f64; 2],

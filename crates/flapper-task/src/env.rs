@@ -182,7 +182,7 @@ impl FlightEnv {
         self.control.reset(&initial);
         self.step = 0;
         self.previous_action = self.actions.at_rest(&initial.joint_positions_rad);
-        self.oscillator = OscillatorState { bias: self.previous_action[2] as f64, ..OscillatorState::default() };
+        self.oscillator = self.actions.oscillator_at_rest(&self.previous_action);
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
