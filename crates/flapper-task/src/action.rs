@@ -19,10 +19,10 @@
 //!   policy flaps); each wing's pitch swings with the flap, [`PITCH_SWING_PER_FLAP`] times its amplitude
 //!   and leading it by a quarter cycle (the scripted gait's shape), about the roll differential. A held
 //!   wing (a1 <= 0) sits at its bias with its pitch at the differential. The phase advances by `2 pi f`
-//!   times the control period at every step. With `flap_shape_filter_hz` above 0, the amplitude and the
-//!   bias follow a1 and a3 through a first-order low-pass filter of that cutoff, so that the stroke's
-//!   shape cannot be dithered faster than the wings flap (an unfiltered bias was jittered at 15.7 Hz,
-//!   docs/experiments.md).
+//!   times the control period at every step. With `flap_shape_filter_hz` above 0, the amplitude, the
+//!   bias and the roll follow a1, a3 and a4 through a first-order low-pass filter of that cutoff, so that
+//!   the stroke's shape cannot be dithered faster than the wings flap (an unfiltered bias was jittered at
+//!   15.7 Hz and, with amplitude and bias filtered, the roll's wing pitch at 22.8 Hz; docs/experiments.md).
 //!
 //!   The third action is the flap bias, not a common wing pitch: the joint-target controller flies its
 //!   loops by moving the stroke's centre (flap between +6 and +57 deg over the top of the loop, -59 to
@@ -54,9 +54,11 @@ pub enum ActionMode {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct OscillatorState {
     pub phase_rad: f64,
-    /// a1 and a3 as filtered (or as last given, without the filter).
+    /// a1, a3 and a4 as filtered (or as last given, without the filter).
     pub amplitude: f64,
     pub bias: f64,
+    #[serde(default)]
+    pub roll: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,7 +69,7 @@ pub struct ActionMap {
     frequency_hz: [f64; 2],
     differential_flap: f64,
     amplitude_max: f64,
-    /// Share of the way to a new amplitude or bias covered per step (1 without the shape filter).
+    /// Share of the way to a new amplitude, bias or roll covered per step (1 without the shape filter).
     shape_step_fraction: f64,
     control_period_s: f64,
 }
@@ -105,10 +107,11 @@ impl ActionMap {
         match self.mode {
             ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
             ActionMode::FlapOscillator => {
-                let [asked_amplitude, frequency, asked_bias, differential, tail] = a;
+                let [asked_amplitude, frequency, asked_bias, asked_roll, tail] = a;
                 oscillator.amplitude += self.shape_step_fraction * (asked_amplitude - oscillator.amplitude);
                 oscillator.bias += self.shape_step_fraction * (asked_bias - oscillator.bias);
-                let (amplitude, bias) = (oscillator.amplitude, oscillator.bias);
+                oscillator.roll += self.shape_step_fraction * (asked_roll - oscillator.roll);
+                let (amplitude, bias, differential) = (oscillator.amplitude, oscillator.bias, oscillator.roll);
                 let [low_hz, high_hz] = self.frequency_hz;
                 let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);
                 let phase = (oscillator.phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
@@ -162,11 +165,15 @@ impl ActionMap {
     }
 
     /// The oscillator at an episode's start, after [`ActionMap::at_rest`] gave `previous_action`: no
-    /// phase, wings held at their bias.
+    /// phase, wings held at their bias and pitch difference.
     pub fn oscillator_at_rest(&self, previous_action: &[f32; N_ACTUATED_JOINTS]) -> OscillatorState {
         match self.mode {
             ActionMode::JointTargets => OscillatorState::default(),
-            ActionMode::FlapOscillator => OscillatorState { bias: previous_action[2] as f64, ..Default::default() },
+            ActionMode::FlapOscillator => OscillatorState {
+                bias: previous_action[2] as f64,
+                roll: previous_action[3] as f64,
+                ..Default::default()
+            },
         }
     }
 

@@ -70,8 +70,8 @@ pub struct ControlConfig {
     /// The flap amplitude of a1 = +1 as a multiple of the flap limit (`flap_oscillator` only); the
     /// targets are clipped to the limit, so above 1 the stroke flattens towards a square wave.
     pub flap_amplitude_max: f64,
-    /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude and bias (`flap_oscillator`
-    /// only); 0 applies them as given.
+    /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude, bias and roll
+    /// (`flap_oscillator` only); 0 applies them as given.
     pub flap_shape_filter_hz: f64,
 }
 

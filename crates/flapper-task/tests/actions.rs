@@ -186,22 +186,22 @@ fn an_amplitude_above_the_flap_limit_flattens_the_stroke_at_the_limit() {
 }
 
 #[test]
-fn the_shape_filter_smooths_amplitude_and_bias_but_not_the_roll_or_tail() {
+fn the_shape_filter_smooths_amplitude_bias_and_roll_but_not_the_tail() {
     let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
     let control =
         ControlConfig { action_mode: ActionMode::FlapOscillator, flap_shape_filter_hz: 2.0, ..Default::default() };
     let map = ActionMap::new(&sim, &control, PERIOD_S);
     let half = map.half_range_rad();
     let mut oscillator = OscillatorState::default();
-    // A bias dithered at 25 Hz (+1, -1, ...) stays near its mean of 0; a held one gets there.
-    let mut biases = Vec::new();
+    // A bias and a roll dithered at 25 Hz (+1, -1, ...) stay near their mean of 0; the tail does not.
+    let mut shapes = Vec::new();
     for k in 0..100 {
         let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-        let t = map.to_targets(&[-1.0, 0.0, sign, 0.3, -0.5], &mut oscillator);
-        biases.push(oscillator.bias);
-        assert!((t[TAIL] + 0.5 * half[TAIL]).abs() < 1e-6 && (t[PITCH_LEFT] - 0.3 * half[PITCH_LEFT]).abs() < 1e-6);
+        let t = map.to_targets(&[-1.0, 0.0, sign, sign, -0.5 * sign], &mut oscillator);
+        shapes.push((oscillator.bias, t[PITCH_LEFT] / half[PITCH_LEFT]));
+        assert!((t[TAIL] + 0.5 * sign as f64 * half[TAIL]).abs() < 1e-6);
     }
-    assert!(biases[10..].iter().all(|b| b.abs() < 0.15), "{:?}", &biases[..12]);
+    assert!(shapes[10..].iter().all(|(b, p)| b.abs() < 0.15 && p.abs() < 0.15), "{:?}", &shapes[..12]);
     // After a step to 1, one time constant (1 / (2 pi 2 Hz) = 80 ms, 4 steps) covers about 63%.
     let mut oscillator = OscillatorState::default();
     let bias_after = |steps: usize, oscillator: &mut OscillatorState| {
