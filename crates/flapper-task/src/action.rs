@@ -119,22 +119,22 @@ impl ActionMap {
                 oscillator.phase_rad = phase;
                 let flap_half_range = self.half_range_rad[ActuatedJoint::FlapLeft.index()];
                 let pitch_half_range = self.half_range_rad[ActuatedJoint::PitchLeft.index()];
-                // side: +1 left, -1 right. A positive roll action pitches the left wing's leading edge down
-                // and the right one's up (less lift left, more right), and flaps the left wing less.
-                let flap_amplitude = |side: f64| {
+                let (sin, cos) = phase.sin_cos();
+                // Flap and pitch targets of one wing, side +1 left, -1 right. A positive roll action pitches
+                // the left wing's leading edge down and the right one's up (less lift left, more right),
+                // and flaps the left wing less.
+                let wing = |side: f64| {
                     let roll = 1.0 - side * self.differential_flap * differential;
-                    amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range
+                    let flap_amplitude = amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range;
+                    let flap = (bias * flap_half_range + flap_amplitude * sin).clamp(-flap_half_range, flap_half_range);
+                    let swing = PITCH_SWING_PER_FLAP * flap_amplitude * cos;
+                    let pitch =
+                        (side * differential * pitch_half_range + swing).clamp(-pitch_half_range, pitch_half_range);
+                    (flap, pitch)
                 };
-                let flap = |side: f64| {
-                    (bias * flap_half_range + flap_amplitude(side) * phase.sin())
-                        .clamp(-flap_half_range, flap_half_range)
-                };
-                let wing_pitch = |side: f64| {
-                    let swing = PITCH_SWING_PER_FLAP * flap_amplitude(side) * phase.cos();
-                    (side * differential * pitch_half_range + swing).clamp(-pitch_half_range, pitch_half_range)
-                };
+                let ((flap_left, pitch_left), (flap_right, pitch_right)) = (wing(1.0), wing(-1.0));
                 let tail = tail * self.half_range_rad[ActuatedJoint::TailPitch.index()];
-                [flap(1.0), wing_pitch(1.0), flap(-1.0), wing_pitch(-1.0), tail]
+                [flap_left, pitch_left, flap_right, pitch_right, tail]
             }
         }
     }
@@ -169,11 +169,10 @@ impl ActionMap {
     pub fn oscillator_at_rest(&self, previous_action: &[f32; N_ACTUATED_JOINTS]) -> OscillatorState {
         match self.mode {
             ActionMode::JointTargets => OscillatorState::default(),
-            ActionMode::FlapOscillator => OscillatorState {
-                bias: previous_action[2] as f64,
-                roll: previous_action[3] as f64,
-                ..Default::default()
-            },
+            ActionMode::FlapOscillator => {
+                let [_, _, bias, roll, _] = previous_action.map(f64::from);
+                OscillatorState { bias, roll, ..Default::default() }
+            }
         }
     }
 
