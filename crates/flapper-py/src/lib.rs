@@ -226,6 +226,7 @@ impl VecEnvCore {
         out.set_item("reward_body_rate", term(|t| t.body_rate))?;
         out.set_item("reward_level", term(|t| t.level))?;
         out.set_item("reward_energy", term(|t| t.energy))?;
+        out.set_item("reward_action_rate", term(|t| t.action_rate))?;
         Ok(out)
     }
 

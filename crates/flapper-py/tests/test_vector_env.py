@@ -35,7 +35,7 @@ def test_reset_and_step_shapes():
     assert reward.shape == (4,) and reward.dtype == np.float32
     assert terminated.shape == (4,) and terminated.dtype == np.bool_
     assert truncated.shape == (4,) and truncated.dtype == np.bool_
-    assert set(info["reward_terms"]) == {"position", "body_rate", "level", "energy"}
+    assert set(info["reward_terms"]) == {"position", "body_rate", "level", "energy", "action_rate"}
     for values in info["reward_terms"].values():
         assert values.shape == (4,) and np.all((values >= 0) & (values <= 1))
     assert np.all(info["position_error_m"] >= 0)

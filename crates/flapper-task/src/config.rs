@@ -100,6 +100,10 @@ pub struct RewardConfig {
     pub level_scale_rad: f64,
     /// Mean absolute mechanical power at which r_energy falls to 1/e.
     pub energy_scale_w: f64,
+    /// Weight of r_action_rate (not the paper's; 0 leaves it out).
+    pub action_rate_weight: f64,
+    /// Norm of the step-to-step change of the applied action at which r_action_rate falls to 1/e.
+    pub action_rate_scale: f64,
 }
 
 /// Paper III-F: 30 s episodes, 3 m error termination, attitude termination in stages 1-2.
@@ -232,6 +236,8 @@ impl Default for RewardConfig {
             body_rate_scale_radps: 3.0,
             level_scale_rad: 0.5,
             energy_scale_w: 20.0,
+            action_rate_weight: 0.0,
+            action_rate_scale: 1.0,
         }
     }
 }
@@ -416,6 +422,8 @@ impl TaskConfig {
             ("reward.body_rate_weight", r.body_rate_weight, 0.0, 1e3),
             ("reward.level_weight", r.level_weight, 0.0, 1e3),
             ("reward.energy_weight", r.energy_weight, 0.0, 1e3),
+            ("reward.action_rate_weight", r.action_rate_weight, 0.0, 1e3),
+            ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -583,6 +591,10 @@ mod tests {
         assert!(err.contains("control.flap_frequency_hz"), "{err}");
         let err = TaskConfig::from_toml("[control]\ndifferential_flap = 1.5\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("control.differential_flap") && err.contains("1.5"), "{err}");
+        let err = TaskConfig::from_toml("[reward]\naction_rate_scale = 0.0\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
+        let err = TaskConfig::from_toml("[reward]\naction_rate_weight = -1\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
         let err =

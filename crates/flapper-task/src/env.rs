@@ -216,7 +216,10 @@ impl FlightEnv {
         let targets = self.actions.to_targets(action, &mut self.oscillator);
         let fault = self.control.step(&targets).err();
         self.step += 1;
-        self.previous_action = self.actions.applied(action, &targets);
+        let applied = self.actions.applied(action, &targets);
+        let action_change =
+            applied.iter().zip(&self.previous_action).map(|(a, b)| f64::from(a - b).powi(2)).sum::<f64>().sqrt();
+        self.previous_action = applied;
         let sim = self.control.sim();
         let position = sim.base_position_m();
         let [roll, pitch, _] = quat_to_euler(sim.orientation());
@@ -230,6 +233,7 @@ impl FlightEnv {
                 roll_rad: roll,
                 pitch_rad: pitch,
                 absolute_power_w: power,
+                action_change,
             },
         );
         let end = if fault.is_some() {

@@ -9,6 +9,10 @@
 //! | r_rate | exp(-(p^2 + q^2 + r^2) / s^2) | s = 3.0 rad/s |
 //! | r_level | exp(-(roll^2 + pitch^2) / s^2) | s = 0.5 rad |
 //! | r_energy | exp(-P / s), P = mean of sum(abs(torque * joint velocity)) over the step | s = 20 W |
+//! | r_action_rate | exp(-d^2 / s^2), d = norm of the change of the applied action since the last step | s = 1.0 |
+//!
+//! r_action_rate is not the paper's: its weight is 0 unless a config sets `action_rate_weight`. It
+//! prices a quick change of what the policy asks (a dither) without pricing a steady flap.
 
 use crate::config::RewardConfig;
 
@@ -19,6 +23,9 @@ pub struct RewardTerms {
     pub body_rate: f64,
     pub level: f64,
     pub energy: f64,
+    /// Snapshots written before this term existed read it as 0.
+    #[serde(default)]
+    pub action_rate: f64,
 }
 
 /// What the reward looks at after a control step.
@@ -30,6 +37,8 @@ pub struct RewardInputs {
     pub roll_rad: f64,
     pub pitch_rad: f64,
     pub absolute_power_w: f64,
+    /// Norm of the change of the applied action (each number in [-1, 1]) since the last step.
+    pub action_change: f64,
 }
 
 impl RewardTerms {
@@ -40,6 +49,7 @@ impl RewardTerms {
             body_rate: gaussian(x.body_rate_radps, config.body_rate_scale_radps),
             level: gaussian(x.roll_rad.hypot(x.pitch_rad), config.level_scale_rad),
             energy: (-x.absolute_power_w.max(0.0) / config.energy_scale_w).exp(),
+            action_rate: gaussian(x.action_change, config.action_rate_scale),
         }
     }
 
@@ -49,6 +59,7 @@ impl RewardTerms {
             + config.body_rate_weight * self.body_rate
             + config.level_weight * self.level
             + config.energy_weight * self.energy
+            + config.action_rate_weight * self.action_rate
     }
 
     pub fn add(&mut self, other: &Self) {
@@ -56,6 +67,7 @@ impl RewardTerms {
         self.body_rate += other.body_rate;
         self.level += other.level;
         self.energy += other.energy;
+        self.action_rate += other.action_rate;
     }
 }
 
@@ -70,6 +82,7 @@ mod tests {
             roll_rad: 0.0,
             pitch_rad: 0.0,
             absolute_power_w: 0.0,
+            action_change: 0.0,
         }
     }
 
@@ -77,20 +90,40 @@ mod tests {
     fn ideal_flight_earns_the_sum_of_the_weights() {
         let c = RewardConfig::default();
         let terms = RewardTerms::evaluate(&c, &ideal());
-        assert_eq!(terms, RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0 });
+        assert_eq!(terms, RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0 });
         assert!((terms.total(&c) - 0.85).abs() < 1e-12);
     }
 
     #[test]
+    fn the_action_rate_term_counts_only_with_its_weight_and_prices_a_dither_above_a_steady_change() {
+        let mut c = RewardConfig::default();
+        let dither = RewardInputs { action_change: 0.6, ..ideal() };
+        // Off by default: the paper's reward, whatever the action does.
+        assert_eq!(RewardTerms::evaluate(&c, &dither).total(&c), RewardTerms::evaluate(&c, &ideal()).total(&c));
+        c.action_rate_weight = 0.2;
+        let total =
+            |change: f64| RewardTerms::evaluate(&c, &RewardInputs { action_change: change, ..ideal() }).total(&c);
+        assert!((total(0.0) - 1.05).abs() < 1e-12);
+        // A jump of 0.6 every step (a dither at 25 Hz) costs more than the same change spread over 5 steps.
+        let dither_cost = 5.0 * (total(0.0) - total(0.6));
+        let steady_cost = 5.0 * (total(0.0) - total(0.12));
+        assert!(dither_cost > 10.0 * steady_cost, "dither {dither_cost}, steady {steady_cost}");
+        // At the scale the kernel is 1/e.
+        let at_scale = RewardTerms::evaluate(&c, &RewardInputs { action_change: c.action_rate_scale, ..ideal() });
+        assert!((at_scale.action_rate - (-1f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
     fn each_term_falls_as_its_error_grows_and_stays_bounded() {
-        let c = RewardConfig::default();
+        let c = RewardConfig { action_rate_weight: 0.2, ..RewardConfig::default() };
         /// A term's name, its input made worse by x, and the term read from the result.
         type Worsening = (&'static str, fn(f64) -> RewardInputs, fn(&RewardTerms) -> f64);
-        let worse: [Worsening; 4] = [
+        let worse: [Worsening; 5] = [
             ("position", |x| RewardInputs { position_error_m: x, ..ideal() }, |t| t.position),
             ("body rate", |x| RewardInputs { body_rate_radps: x, ..ideal() }, |t| t.body_rate),
             ("level", |x| RewardInputs { roll_rad: x, pitch_rad: -x, ..ideal() }, |t| t.level),
             ("energy", |x| RewardInputs { absolute_power_w: 10.0 * x, ..ideal() }, |t| t.energy),
+            ("action rate", |x| RewardInputs { action_change: x, ..ideal() }, |t| t.action_rate),
         ];
         for (name, input, term) in worse {
             let mut previous = 1.0;
@@ -100,7 +133,7 @@ mod tests {
                 assert!(value < previous, "{name}: not decreasing at {x}");
                 assert!((0.0..=1.0).contains(&value), "{name}: {value} out of bounds");
                 let total = terms.total(&c);
-                assert!((0.0..=0.85).contains(&total));
+                assert!((0.0..1.05).contains(&total), "{name}: total {total} at {x}");
                 previous = value;
             }
         }

@@ -82,6 +82,34 @@ fn history_shifts_by_one_frame_per_step() {
 }
 
 #[test]
+fn the_action_rate_term_reads_the_change_of_the_applied_action_and_joins_the_reward_only_when_weighted() {
+    use flapper_task::action::ActionMode;
+    let env = |mode: ActionMode, weight: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.control.action_mode = mode;
+        config.reward.action_rate_weight = weight;
+        FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap()
+    };
+    let (a, b) = ([0.3f32, 0.0, 0.3, 0.0, -0.2], [-0.3f32, 0.0, -0.3, 0.0, -0.2]);
+    for mode in [ActionMode::JointTargets, ActionMode::FlapOscillator] {
+        let (mut plain, mut weighted) = (env(mode, 0.0), env(mode, 0.5));
+        for (step, action) in [a, a, b].into_iter().enumerate() {
+            let (p, w) = (plain.step(&action), weighted.step(&action));
+            // The same flight and kernels: the weight changes the reward, not the physics.
+            assert_eq!((p.position_error_m, p.terms), (w.position_error_m, w.terms), "{mode:?}");
+            assert!((w.reward - p.reward - 0.5 * w.terms.action_rate).abs() < 1e-12, "{mode:?}");
+            match step {
+                // Holding the action: no change, the kernel's top.
+                1 => assert_eq!(w.terms.action_rate, 1.0, "{mode:?}"),
+                // Two numbers jumping by 0.6 each: exp(-(0.6^2 + 0.6^2) / 1.0^2).
+                2 => assert!((w.terms.action_rate - (-0.72f64).exp()).abs() < 1e-6, "{mode:?}: {:?}", w.terms),
+                _ => {}
+            }
+        }
+    }
+}
+
+#[test]
 fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();

@@ -1,5 +1,5 @@
 //! The flight task's vectorized environments as the learner sees them: the [`VecEnv`] interface over
-//! [`FlightVecEnv`], with the four reward kernels as per-step diagnostics.
+//! [`FlightVecEnv`], with the reward kernels as per-step diagnostics.
 
 use flapper_ppo::{EndReason, EnvError, EpisodeRecord, VecEnv};
 use flapper_sim::{ModelError, RobotModel};
@@ -8,6 +8,10 @@ use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
 
 /// Names of the diagnostics: each reward kernel's value in (0, 1], before weighting.
 pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level", "r_energy"];
+
+/// The diagnostic logged after [`REWARD_TERM_NAMES`] when the task weighs it (`reward.action_rate_weight`
+/// above 0), so that the logs of runs without it keep their columns and resume as they were written.
+pub const ACTION_RATE_TERM_NAME: &str = "r_action_rate";
 
 /// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
 const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
@@ -35,6 +39,7 @@ impl EndReason for FlightEnd {
 pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
+    logs_action_rate: bool,
 }
 
 impl FlightEnvs {
@@ -47,9 +52,11 @@ impl FlightEnvs {
         seed: u64,
         threads: usize,
     ) -> Result<Self, ModelError> {
+        let logs_action_rate = task.reward.action_rate_weight > 0.0;
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
-        Ok(Self { diagnostics: vec![0.0; count * REWARD_TERM_NAMES.len()], inner })
+        let per_env = REWARD_TERM_NAMES.len() + usize::from(logs_action_rate);
+        Ok(Self { diagnostics: vec![0.0; count * per_env], inner, logs_action_rate })
     }
 
     pub fn inner(&self) -> &FlightVecEnv {
@@ -74,8 +81,12 @@ impl VecEnv for FlightEnvs {
 
     fn step(&mut self, actions: &[f32]) -> Result<(), EnvError> {
         self.inner.step(actions)?;
-        for (out, t) in self.diagnostics.chunks_exact_mut(REWARD_TERM_NAMES.len()).zip(self.inner.reward_terms()) {
-            out.copy_from_slice(&[t.position as f32, t.body_rate as f32, t.level as f32, t.energy as f32]);
+        let per_env = self.diagnostics.len() / self.inner.len();
+        for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
+            let all = [t.position, t.body_rate, t.level, t.energy, t.action_rate];
+            for (o, value) in out.iter_mut().zip(all) {
+                *o = value as f32;
+            }
         }
         Ok(())
     }
@@ -109,7 +120,8 @@ impl VecEnv for FlightEnvs {
     }
 
     fn diagnostic_names(&self) -> Vec<String> {
-        REWARD_TERM_NAMES.iter().map(|s| s.to_string()).collect()
+        let extra = self.logs_action_rate.then_some(ACTION_RATE_TERM_NAME);
+        REWARD_TERM_NAMES.iter().copied().chain(extra).map(str::to_string).collect()
     }
 
     fn diagnostics(&self) -> &[f32] {

@@ -96,6 +96,31 @@ fn a_resumed_flight_run_equals_the_uninterrupted_one() {
 }
 
 #[test]
+fn the_action_rate_kernel_is_logged_when_weighted_and_older_logs_keep_their_columns() {
+    let columns = |weight: Option<f64>, name: &str| {
+        let mut config = small_flight_config(2, 5);
+        if let Some(w) = weight {
+            config.task.reward.action_rate_weight = w;
+        }
+        let dir = scratch_dir(name);
+        train(&config, &dir, Start::Fresh);
+        let text = std::fs::read_to_string(dir.join("training.csv")).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let mut lines = text.lines().map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>());
+        let header = lines.next().unwrap();
+        (header, lines.collect::<Vec<_>>())
+    };
+    let (header, _) = columns(None, "no-action-rate");
+    assert!(header.contains(&"r_energy".to_string()) && !header.contains(&"r_action_rate".to_string()));
+    let (header, rows) = columns(Some(0.2), "action-rate");
+    let column = header.iter().position(|h| h == "r_action_rate").expect("r_action_rate logged");
+    for row in rows {
+        let value: f64 = row[column].parse().unwrap();
+        assert!(value > 0.0 && value < 1.0, "r_action_rate {value}: exploration noise moves the action every step");
+    }
+}
+
+#[test]
 fn environments_saved_in_a_checkpoint_read_back_to_the_last_bit() {
     // A checkpoint holds every environment as JSON. serde_json's default float parser may miss the
     // last bit of an f64; a run resumed from such a state drifted from the uninterrupted one from its

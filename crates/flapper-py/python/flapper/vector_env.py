@@ -8,7 +8,7 @@ from gymnasium.vector import AutoresetMode
 
 from ._flapper import VecEnvCore
 
-REWARD_TERMS = ("position", "body_rate", "level", "energy")
+REWARD_TERMS = ("position", "body_rate", "level", "energy", "action_rate")
 
 
 class FlightVectorEnv(gymnasium.vector.VectorEnv):
@@ -27,7 +27,7 @@ class FlightVectorEnv(gymnasium.vector.VectorEnv):
     episode's first; the ended episode's last observation is in `info["final_obs"]` (rows where
     `info["_final_obs"]` is true), and its return, length and end in `info["episode"]`.
 
-    `info` also carries every step: `reward_terms` (the four kernel values, unweighted),
+    `info` also carries every step: `reward_terms` (the five kernel values, unweighted),
     `position_error_m` (distance to the target after the step).
     """
 
