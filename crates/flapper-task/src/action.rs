@@ -54,7 +54,7 @@ pub enum ActionMode {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct OscillatorState {
     pub phase_rad: f64,
-    /// a1, a3 and a4 as filtered (or as last given, without the filter).
+    /// a1, a3 and a4 as filtered and rate-limited (or as last given, without either).
     pub amplitude: f64,
     pub bias: f64,
     #[serde(default)]
@@ -71,6 +71,8 @@ pub struct ActionMap {
     amplitude_max: f64,
     /// Share of the way to a new amplitude, bias or roll covered per step (1 without the shape filter).
     shape_step_fraction: f64,
+    /// Largest change of amplitude, bias or roll per step (infinite without the rate limit).
+    shape_max_step: f64,
     control_period_s: f64,
 }
 
@@ -96,8 +98,19 @@ impl ActionMap {
             } else {
                 1.0
             },
+            shape_max_step: if control.flap_shape_rate_limit > 0.0 {
+                control.flap_shape_rate_limit * control_period_s
+            } else {
+                f64::INFINITY
+            },
             control_period_s,
         }
+    }
+
+    /// One step of a shape channel (amplitude, bias or roll) from `current` towards `asked`: the
+    /// shape filter's share of the way, at most the rate limit's step.
+    fn shape_step(&self, current: f64, asked: f64) -> f64 {
+        current + (self.shape_step_fraction * (asked - current)).clamp(-self.shape_max_step, self.shape_max_step)
     }
 
     /// Joint targets (rad) for an action. `oscillator` is the oscillator's state, which this advances
@@ -108,9 +121,9 @@ impl ActionMap {
             ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
             ActionMode::FlapOscillator => {
                 let [asked_amplitude, frequency, asked_bias, asked_roll, tail] = a;
-                oscillator.amplitude += self.shape_step_fraction * (asked_amplitude - oscillator.amplitude);
-                oscillator.bias += self.shape_step_fraction * (asked_bias - oscillator.bias);
-                oscillator.roll += self.shape_step_fraction * (asked_roll - oscillator.roll);
+                oscillator.amplitude = self.shape_step(oscillator.amplitude, asked_amplitude);
+                oscillator.bias = self.shape_step(oscillator.bias, asked_bias);
+                oscillator.roll = self.shape_step(oscillator.roll, asked_roll);
                 let (amplitude, bias, differential) = (oscillator.amplitude, oscillator.bias, oscillator.roll);
                 let [low_hz, high_hz] = self.frequency_hz;
                 let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);

@@ -73,6 +73,10 @@ pub struct ControlConfig {
     /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude, bias and roll
     /// (`flap_oscillator` only); 0 applies them as given.
     pub flap_shape_filter_hz: f64,
+    /// Largest rate of change (action units per second) of the oscillator's amplitude, bias and roll
+    /// (`flap_oscillator` only); 0 leaves them free. Unlike the filter it delays no slow change: it
+    /// bounds how fast the stroke's shape moves, so a dither between steps shrinks to this rate.
+    pub flap_shape_rate_limit: f64,
 }
 
 /// Paper III-C: 25 frames of history (0.5 s) and 30 reference points ahead (0.6 s).
@@ -215,6 +219,7 @@ impl Default for ControlConfig {
             differential_flap: 0.0,
             flap_amplitude_max: 1.0,
             flap_shape_filter_hz: 0.0,
+            flap_shape_rate_limit: 0.0,
         }
     }
 }
@@ -414,6 +419,7 @@ impl TaskConfig {
             ("control.differential_flap", self.control.differential_flap, 0.0, 1.0),
             ("control.flap_amplitude_max", self.control.flap_amplitude_max, 0.1, 3.0),
             ("control.flap_shape_filter_hz", self.control.flap_shape_filter_hz, 0.0, 100.0),
+            ("control.flap_shape_rate_limit", self.control.flap_shape_rate_limit, 0.0, 1000.0),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
             ("reward.body_rate_scale_radps", r.body_rate_scale_radps, 1e-3, 1e3),
             ("reward.level_scale_rad", r.level_scale_rad, 1e-3, 1e3),
@@ -595,6 +601,8 @@ mod tests {
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
         let err = TaskConfig::from_toml("[reward]\naction_rate_weight = -1\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
+        let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
+        assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("stage 9"), "{err}");
         let err =

@@ -218,3 +218,29 @@ fn the_shape_filter_smooths_amplitude_bias_and_roll_but_not_the_tail() {
     map.to_targets(&[1.0, 0.0, 0.0, 0.0, 0.0], &mut oscillator);
     assert!(oscillator.amplitude > 0.0 && oscillator.amplitude < 0.3, "{}", oscillator.amplitude);
 }
+
+#[test]
+fn the_rate_limit_caps_how_fast_the_shape_moves_without_delaying_a_slow_change() {
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    let control =
+        ControlConfig { action_mode: ActionMode::FlapOscillator, flap_shape_rate_limit: 4.0, ..Default::default() };
+    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let max_step = 4.0 * PERIOD_S;
+    // A bias and a roll dithered at 25 Hz (+1, -1, ...) move at most 0.08 per step: they stay within
+    // one step of their start; the amplitude asked to go from 0 to 1 ramps at the rate.
+    let mut oscillator = OscillatorState::default();
+    for k in 0..50 {
+        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        map.to_targets(&[1.0, 0.0, sign, sign, 0.0], &mut oscillator);
+        assert!(oscillator.bias.abs() <= max_step + 1e-12 && oscillator.roll.abs() <= max_step + 1e-12);
+        let expected = (max_step * (k + 1) as f64).min(1.0);
+        assert!((oscillator.amplitude - expected).abs() < 1e-12, "step {k}: {}", oscillator.amplitude);
+    }
+    // A change slower than the limit passes undelayed: a ramp of 0.02 per step is followed exactly.
+    let mut oscillator = OscillatorState::default();
+    for k in 1..=40 {
+        let asked = 0.02 * k as f64;
+        map.to_targets(&[-1.0, 0.0, asked as f32, 0.0, 0.0], &mut oscillator);
+        assert!((oscillator.bias - asked).abs() < 1e-6, "step {k}: {} for {asked}", oscillator.bias);
+    }
+}
