@@ -58,6 +58,11 @@ pub struct PpoConfig {
     pub activation: Activation,
     /// Initial standard deviation of every action (the log-std is learned, state-independent).
     pub init_noise_std: f32,
+    /// Weight of the temporal smoothness of the actor's mean (CAPS, Mysore et al. 2021; not rsl_rl's,
+    /// 0 = off): the loss adds this times the mean over samples of |mu(s_t) - mu_old(s_t-1)|^2 +
+    /// |mu(s_t) - mu_old(s_t+1)|^2 over the neighbours in the same episode and rollout, mu_old being
+    /// the means at collection. It acts on the mean, so the exploration noise does not drown it.
+    pub smoothness_coef: f32,
 }
 
 impl Default for PpoConfig {
@@ -81,6 +86,7 @@ impl Default for PpoConfig {
             critic_hidden: vec![256, 128, 64],
             activation: Activation::Elu,
             init_noise_std: 1.0,
+            smoothness_coef: 0.0,
         }
     }
 }
@@ -138,6 +144,12 @@ impl PpoConfig {
                 "must be in [0, 1000]",
             ),
             ("ppo.entropy_coef", self.entropy_coef, not_negative(self.entropy_coef, 1e3), "must be in [0, 1000]"),
+            (
+                "ppo.smoothness_coef",
+                self.smoothness_coef,
+                not_negative(self.smoothness_coef, 1e3),
+                "must be in [0, 1000]",
+            ),
             ("ppo.gamma", self.gamma, not_negative(self.gamma, 1.0), "must be in [0, 1]"),
             ("ppo.lambda", self.lambda, not_negative(self.lambda, 1.0), "must be in [0, 1]"),
         ] {

@@ -55,6 +55,11 @@ pub struct Minibatch {
     pub old_values: Vec<f32>,
     pub advantages: Vec<f32>,
     pub returns: Vec<f32>,
+    /// The collected means of each sample's neighbours in time (the step before and after in the same
+    /// episode and rollout), `neighbours[i]` of them from `neighbour_means[i * 2 * action_size]` on.
+    /// Filled only with `smoothness_coef` above 0.
+    pub neighbour_means: Vec<f32>,
+    pub neighbours: Vec<u8>,
 }
 
 /// The loss of one minibatch and its parts.
@@ -68,7 +73,9 @@ pub struct LossTerms {
     pub kl: f64,
     /// Fraction of samples whose ratio lies outside [1 - clip, 1 + clip].
     pub clip_fraction: f64,
-    /// surrogate + value_loss_coef value - entropy_coef entropy.
+    /// Mean over samples of the squared distance of the actor's mean to its neighbours' collected means.
+    pub smoothness: f64,
+    /// surrogate + value_loss_coef value - entropy_coef entropy + smoothness_coef smoothness.
     pub total: f64,
 }
 
@@ -107,8 +114,9 @@ pub fn loss_and_gradients(
         )
     };
     terms.value = value_loss;
-    terms.total =
-        terms.surrogate + config.value_loss_coef as f64 * terms.value - config.entropy_coef as f64 * terms.entropy;
+    terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value
+        - config.entropy_coef as f64 * terms.entropy
+        + config.smoothness_coef as f64 * terms.smoothness;
     terms
 }
 
@@ -164,6 +172,16 @@ fn policy_loss(
             d_mean[i * a_size + j] = d_log_prob * diff * inv_var[j];
             log_std_grads[j] += d_log_prob * (diff * diff * inv_var[j] - 1.0);
         }
+        if config.smoothness_coef > 0.0 {
+            let neighbours = batch.neighbour_means[i * 2 * a_size..].chunks_exact(a_size);
+            for neighbour in neighbours.take(batch.neighbours[i] as usize) {
+                for j in 0..a_size {
+                    let gap = mu[j] - neighbour[j];
+                    terms.smoothness += (gap * gap) as f64;
+                    d_mean[i * a_size + j] += 2.0 * config.smoothness_coef * gap * inv_n;
+                }
+            }
+        }
     }
     // Entropy of a diagonal Gaussian: sum_j (log sigma_j + 1/2 + ln(2 pi)/2), the same for every sample.
     let entropy = log_std_sum + a_size as f32 * (0.5 + HALF_LN_2PI);
@@ -175,6 +193,7 @@ fn policy_loss(
     terms.surrogate /= n;
     terms.kl /= n;
     terms.clip_fraction /= n;
+    terms.smoothness /= n;
     terms.entropy = entropy as f64;
     terms
 }
@@ -265,6 +284,8 @@ mod tests {
             old_values,
             advantages: (0..n).map(|_| rng.random_range(-2.0..2.0)).collect(),
             returns: (0..n).map(|_| rng.random_range(-1.0..1.0)).collect(),
+            neighbour_means: (0..n * 2 * 3).map(|_| rng.random_range(-1.0..1.0)).collect(),
+            neighbours: (0..n).map(|i| (i % 3) as u8).collect(),
         };
         (policy, config, batch)
     }
@@ -279,8 +300,9 @@ mod tests {
     }
 
     /// Central differences, relative error per tensor, as for the MLP.
-    fn check(clipped_value_loss: bool) {
-        let (mut policy, config, batch) = setup(clipped_value_loss);
+    fn check(clipped_value_loss: bool, smoothness_coef: f32) {
+        let (mut policy, mut config, batch) = setup(clipped_value_loss);
+        config.smoothness_coef = smoothness_coef;
         let mut grads = Gradients::zeros(&policy);
         let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
         assert!(
@@ -334,8 +356,42 @@ mod tests {
 
     #[test]
     fn ppo_loss_gradients_match_finite_differences() {
-        check(true);
-        check(false);
+        check(true, 0.0);
+        check(false, 0.0);
+        check(true, 0.7);
+    }
+
+    #[test]
+    fn the_smoothness_term_pulls_the_mean_towards_its_neighbours_and_ignores_missing_ones() {
+        let (mut policy, mut config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        config.entropy_coef = 0.0;
+        let distance = |policy: &ActorCritic, config: &PpoConfig, batch: &Minibatch| {
+            let mut grads = Gradients::zeros(policy);
+            loss_and_gradients(policy, config, batch, &mut LossScratch::default(), &mut grads, 1)
+        };
+        // Off: no term, whatever the neighbours.
+        assert_eq!(distance(&policy, &config, &batch).smoothness, 0.0);
+        config.smoothness_coef = 1.0;
+        let before = distance(&policy, &config, &batch);
+        assert!(before.smoothness > 0.0);
+        // Only the first neighbours[i] means count: garbage after them changes nothing.
+        let mut padded = batch.clone();
+        for i in 0..padded.size {
+            let start = i * 6 + padded.neighbours[i] as usize * 3;
+            padded.neighbour_means[start..(i + 1) * 6].iter_mut().for_each(|m| *m = 1e6);
+        }
+        assert_eq!(distance(&policy, &config, &padded), before);
+        // Gradient steps on the actor bring the means closer to their neighbours.
+        for _ in 0..20 {
+            let mut grads = Gradients::zeros(&policy);
+            loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+            for (p, g) in policy.actor.params_mut().iter_mut().zip(&grads.actor) {
+                *p -= 0.05 * g;
+            }
+        }
+        let after = distance(&policy, &config, &batch);
+        assert!(after.smoothness < 0.9 * before.smoothness, "{} -> {}", before.smoothness, after.smoothness);
     }
 
     #[test]

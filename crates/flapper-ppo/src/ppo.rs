@@ -264,7 +264,20 @@ impl Ppo {
         mb.old_values.clear();
         mb.advantages.clear();
         mb.returns.clear();
+        mb.neighbour_means.clear();
+        mb.neighbours.clear();
+        let smooth = self.config.smoothness_coef > 0.0;
         for &i in indices {
+            if smooth {
+                let [before, after] = s.neighbours_in_episode(i);
+                let mut count = 0u8;
+                for k in before.into_iter().chain(after) {
+                    mb.neighbour_means.extend_from_slice(&s.means[k * a..(k + 1) * a]);
+                    count += 1;
+                }
+                mb.neighbour_means.resize(mb.neighbour_means.len() + (2 - count as usize) * a, 0.0);
+                mb.neighbours.push(count);
+            }
             mb.observations.extend_from_slice(&s.observations[i * o..(i + 1) * o]);
             mb.actions.extend_from_slice(&s.actions[i * a..(i + 1) * a]);
             mb.old_means.extend_from_slice(&s.means[i * a..(i + 1) * a]);

@@ -104,6 +104,15 @@ impl RolloutStorage {
         step * self.envs..(step + 1) * self.envs
     }
 
+    /// The rows of sample `i`'s step before and step after in the same environment, where they belong
+    /// to the same episode and this rollout (a done step ends its episode).
+    pub fn neighbours_in_episode(&self, i: usize) -> [Option<usize>; 2] {
+        let (step, envs) = (i / self.envs, self.envs);
+        let before = (step > 0 && !self.dones[i - envs]).then(|| i - envs);
+        let after = (step + 1 < self.steps && !self.dones[i]).then_some(i + envs);
+        [before, after]
+    }
+
     /// GAE(gamma, lambda): advantages and returns (= advantages + values), given the values of the
     /// observations after the last step. A done step does not look past itself.
     pub fn compute_returns(&mut self, last_values: &[f32], gamma: f32, lambda: f32) {
@@ -175,6 +184,29 @@ mod tests {
         assert_eq!(s.rewards, [1.0, 1.0, 2.0, 2.0]);
         assert_eq!(s.dones, [false, false, true, true]);
         assert!(s.is_full());
+    }
+
+    #[test]
+    fn neighbours_stay_in_their_environment_episode_and_rollout() {
+        // Two environments, three steps; environment 1's episode ends after step 0.
+        let mut s = RolloutStorage::new(3, 2, 1, 1);
+        for step in 0..3 {
+            s.add_transition(&Transition {
+                observations: vec![0.0; 2],
+                actions: vec![0.0; 2],
+                log_probs: vec![0.0; 2],
+                means: vec![0.0; 2],
+                values: vec![0.0; 2],
+                rewards: vec![0.0; 2],
+                dones: vec![false, step == 0],
+            });
+        }
+        // Rows: step * 2 + env.
+        assert_eq!(s.neighbours_in_episode(0), [None, Some(2)]);
+        assert_eq!(s.neighbours_in_episode(2), [Some(0), Some(4)]);
+        assert_eq!(s.neighbours_in_episode(4), [Some(2), None]);
+        assert_eq!(s.neighbours_in_episode(1), [None, None], "its episode ended at step 0");
+        assert_eq!(s.neighbours_in_episode(3), [None, Some(5)], "a new episode starts at step 1");
     }
 
     #[test]
