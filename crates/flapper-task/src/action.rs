@@ -9,7 +9,7 @@
 //!   | action | asks for |
 //!   |---|---|
 //!   | a1 | flap amplitude: `max(a1, 0)` times `flap_amplitude_max` times the flap limit; any a1 <= 0 holds the wings (glide) |
-//!   | a2 | flap frequency, from `flap_frequency_hz[0]` at -1 to `[1]` at +1 |
+//!   | a2 | flap frequency, from `flap_frequency_hz[0]` at -1 to `[1]` at +1; or, with `oscillator_a2 = "wing_pitch"`, a common pitch of both wings (a joint target added to each wing's pitch; the frequency then fixed at the middle of `flap_frequency_hz`) |
 //!   | a3 | flap bias (dihedral) of both wings: the stroke's centre, as a joint target |
 //!   | a4 | roll: differential wing pitch, +a4 on the left wing and -a4 on the right, and, with `differential_flap` k, flap amplitudes A (1 - k a4) left and A (1 + k a4) right: both take lift from the left wing |
 //!   | a5 | tail pitch, as a joint target |
@@ -50,6 +50,18 @@ pub enum ActionMode {
     FlapOscillator,
 }
 
+/// What the oscillator's second action asks for (`control.oscillator_a2`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OscillatorA2 {
+    /// The flap frequency, over `flap_frequency_hz`.
+    #[default]
+    Frequency,
+    /// A common pitch of both wings (angle of attack: lift and drag without a flap), the frequency fixed
+    /// at the middle of `flap_frequency_hz`.
+    WingPitch,
+}
+
 /// What the flapping oscillator carries from one step to the next (all 0 in `joint_targets` mode).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct OscillatorState {
@@ -59,6 +71,9 @@ pub struct OscillatorState {
     pub bias: f64,
     #[serde(default)]
     pub roll: f64,
+    /// a2 as filtered and rate-limited, with `oscillator_a2 = "wing_pitch"` (0 otherwise).
+    #[serde(default)]
+    pub wing_pitch: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,6 +81,7 @@ pub struct ActionMap {
     /// Target (rad) reached by an action of +1 for each joint.
     half_range_rad: [f64; N_ACTUATED_JOINTS],
     mode: ActionMode,
+    a2: OscillatorA2,
     frequency_hz: [f64; 2],
     differential_flap: f64,
     amplitude_max: f64,
@@ -90,6 +106,7 @@ impl ActionMap {
         Self {
             half_range_rad: ranges.map(|[low, high]| control.action_scale * high.min(-low)),
             mode: control.action_mode,
+            a2: control.oscillator_a2,
             frequency_hz: control.flap_frequency_hz,
             differential_flap: control.differential_flap,
             amplitude_max: control.flap_amplitude_max,
@@ -120,11 +137,20 @@ impl ActionMap {
         match self.mode {
             ActionMode::JointTargets => std::array::from_fn(|i| a[i] * self.half_range_rad[i]),
             ActionMode::FlapOscillator => {
-                let [asked_amplitude, frequency, asked_bias, asked_roll, tail] = a;
+                let [asked_amplitude, second, asked_bias, asked_roll, tail] = a;
                 oscillator.amplitude = self.shape_step(oscillator.amplitude, asked_amplitude);
                 oscillator.bias = self.shape_step(oscillator.bias, asked_bias);
                 oscillator.roll = self.shape_step(oscillator.roll, asked_roll);
+                // The frequency's position in its range (0 = the middle), or the common wing pitch.
+                let frequency = match self.a2 {
+                    OscillatorA2::Frequency => second,
+                    OscillatorA2::WingPitch => {
+                        oscillator.wing_pitch = self.shape_step(oscillator.wing_pitch, second);
+                        0.0
+                    }
+                };
                 let (amplitude, bias, differential) = (oscillator.amplitude, oscillator.bias, oscillator.roll);
+                let common_pitch = oscillator.wing_pitch;
                 let [low_hz, high_hz] = self.frequency_hz;
                 let frequency_hz = low_hz + 0.5 * (frequency + 1.0) * (high_hz - low_hz);
                 let phase = (oscillator.phase_rad + std::f64::consts::TAU * frequency_hz * self.control_period_s)
@@ -141,8 +167,8 @@ impl ActionMap {
                     let flap_amplitude = amplitude.max(0.0) * self.amplitude_max * roll * flap_half_range;
                     let flap = (bias * flap_half_range + flap_amplitude * sin).clamp(-flap_half_range, flap_half_range);
                     let swing = PITCH_SWING_PER_FLAP * flap_amplitude * cos;
-                    let pitch =
-                        (side * differential * pitch_half_range + swing).clamp(-pitch_half_range, pitch_half_range);
+                    let pitch = ((side * differential + common_pitch) * pitch_half_range + swing)
+                        .clamp(-pitch_half_range, pitch_half_range);
                     (flap, pitch)
                 };
                 let ((flap_left, pitch_left), (flap_right, pitch_right)) = (wing(1.0), wing(-1.0));
@@ -172,7 +198,11 @@ impl ActionMap {
                 let at = |joint: ActuatedJoint| joint_action[joint.index()];
                 let bias = 0.5 * (at(ActuatedJoint::FlapLeft) + at(ActuatedJoint::FlapRight));
                 let differential = 0.5 * (at(ActuatedJoint::PitchLeft) - at(ActuatedJoint::PitchRight));
-                [0.0, 0.0, bias, differential, at(ActuatedJoint::TailPitch)]
+                let second = match self.a2 {
+                    OscillatorA2::Frequency => 0.0,
+                    OscillatorA2::WingPitch => 0.5 * (at(ActuatedJoint::PitchLeft) + at(ActuatedJoint::PitchRight)),
+                };
+                [0.0, second, bias, differential, at(ActuatedJoint::TailPitch)]
             }
         }
     }
@@ -183,8 +213,9 @@ impl ActionMap {
         match self.mode {
             ActionMode::JointTargets => OscillatorState::default(),
             ActionMode::FlapOscillator => {
-                let [_, _, bias, roll, _] = previous_action.map(f64::from);
-                OscillatorState { bias, roll, ..Default::default() }
+                let [_, second, bias, roll, _] = previous_action.map(f64::from);
+                let wing_pitch = if self.a2 == OscillatorA2::WingPitch { second } else { 0.0 };
+                OscillatorState { bias, roll, wing_pitch, ..Default::default() }
             }
         }
     }

@@ -64,6 +64,9 @@ pub struct ControlConfig {
     pub action_mode: crate::action::ActionMode,
     /// The oscillator's frequency range (Hz), from an action of -1 to +1 (`flap_oscillator` only).
     pub flap_frequency_hz: [f64; 2],
+    /// What the oscillator's second action asks for: the frequency (default) or a common wing pitch,
+    /// the frequency then fixed at the middle of `flap_frequency_hz` (`flap_oscillator` only).
+    pub oscillator_a2: crate::action::OscillatorA2,
     /// Flap amplitude difference per unit of the roll action (`flap_oscillator` only): left
     /// A (1 - k a4), right A (1 + k a4); 0 rolls by wing pitch alone.
     pub differential_flap: f64,
@@ -216,6 +219,7 @@ impl Default for ControlConfig {
             action_scale: 1.0,
             action_mode: crate::action::ActionMode::JointTargets,
             flap_frequency_hz: [3.0, 8.0],
+            oscillator_a2: crate::action::OscillatorA2::Frequency,
             differential_flap: 0.0,
             flap_amplitude_max: 1.0,
             flap_shape_filter_hz: 0.0,

@@ -244,3 +244,35 @@ fn the_rate_limit_caps_how_fast_the_shape_moves_without_delaying_a_slow_change()
         assert!((oscillator.bias - asked).abs() < 1e-6, "step {k}: {} for {asked}", oscillator.bias);
     }
 }
+
+#[test]
+fn a_wing_pitch_second_action_pitches_both_wings_alike_at_a_fixed_frequency_and_starts_where_they_are() {
+    use flapper_task::action::OscillatorA2;
+    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
+    let control = ControlConfig {
+        action_mode: ActionMode::FlapOscillator,
+        oscillator_a2: OscillatorA2::WingPitch,
+        flap_frequency_hz: [5.0, 6.0],
+        ..Default::default()
+    };
+    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let half = map.half_range_rad();
+    // Held wings: a2 adds to both pitches on top of the roll's differential.
+    let (targets, _) = hold(&map, [-1.0, 0.3, 0.0, 0.1, 0.0], 5);
+    let t = targets[4];
+    assert!((t[PITCH_LEFT] - 0.4 * half[PITCH_LEFT]).abs() < 1e-6, "{t:?}");
+    assert!((t[PITCH_RIGHT] - 0.2 * half[PITCH_RIGHT]).abs() < 1e-6, "{t:?}");
+    // Flapping: 5.5 Hz whatever a2 asks (22 cycles in 4 s).
+    for second in [-1.0f32, 1.0] {
+        let (targets, _) = hold(&map, [1.0, second, 0.0, 0.0, 0.0], 200);
+        assert!((cycles(&targets) as f64 - 22.0).abs() <= 1.0, "a2 {second}: {} cycles", cycles(&targets));
+    }
+    // A robot at rest with both wings pitched +0.2 and +0.1 starts with a2 = 0.15 and its roll at 0.05,
+    // and its first held-wing targets are where the wings are.
+    let pose = [0.0, 0.2 * half[PITCH_LEFT], 0.0, 0.1 * half[PITCH_RIGHT], 0.0];
+    let at_rest = map.at_rest(&pose);
+    assert!((at_rest[1] - 0.15).abs() < 1e-6 && (at_rest[3] - 0.05).abs() < 1e-6, "{at_rest:?}");
+    let mut oscillator = map.oscillator_at_rest(&at_rest);
+    let first = map.to_targets(&at_rest, &mut oscillator);
+    assert!(first.iter().zip(pose).all(|(t, p)| (t - p).abs() < 1e-6), "{first:?} from {pose:?}");
+}
