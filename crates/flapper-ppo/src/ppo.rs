@@ -37,6 +37,8 @@ pub struct UpdateStats {
     /// Learning rate after the update.
     pub learning_rate: f64,
     pub action_std: f64,
+    /// The smoothness term's mean (`smoothness_coef` above 0; None when off).
+    pub smoothness: Option<f64>,
 }
 
 /// The adaptive schedule's bounds on the learning rate (rsl_rl's).
@@ -204,7 +206,7 @@ impl Ppo {
         let size = total / self.config.minibatches;
         let mut order: Vec<usize> = (0..total).collect();
         let mut stats = UpdateStats::default();
-        let mut count = 0.0;
+        let (mut count, mut smoothness) = (0.0, 0.0);
         for _ in 0..self.config.epochs {
             order.shuffle(&mut self.rng);
             for chunk in order.chunks_exact(size) {
@@ -233,6 +235,7 @@ impl Ppo {
                 stats.entropy += terms.entropy;
                 stats.kl += terms.kl;
                 stats.clip_fraction += terms.clip_fraction;
+                smoothness += terms.smoothness;
                 stats.grad_norm += norm as f64;
                 count += 1.0;
             }
@@ -247,6 +250,7 @@ impl Ppo {
         ] {
             *x /= count;
         }
+        stats.smoothness = (self.config.smoothness_coef > 0.0).then_some(smoothness / count);
         stats.learning_rate = self.learning_rate as f64;
         stats.action_std = self.policy.mean_std() as f64;
         self.storage.clear();

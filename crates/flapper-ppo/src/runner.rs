@@ -176,7 +176,8 @@ impl<E: VecEnv> Trainer<E> {
             diagnostic_names,
             checkpoint_hooks: Vec::new(),
         };
-        let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names);
+        let smoothness = trainer.ppo.config.smoothness_coef > 0.0;
+        let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names, smoothness);
         training_log::prepare(&trainer.csv_path(), &header, matches!(start, Start::Resume), trainer.iteration)?;
         Ok(trainer)
     }

@@ -10,8 +10,9 @@ use crate::ppo::UpdateStats;
 use crate::runner::{IterationLog, TrainError};
 
 /// The CSV header: fixed columns, one `end_<reason>` per episode end, the environment's diagnostics,
-/// the update's statistics and the timings.
-pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String]) -> Vec<String> {
+/// the update's statistics (with `smoothness` after them when the run weighs it, so that the logs of
+/// runs without it keep their columns) and the timings.
+pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String], smoothness: bool) -> Vec<String> {
     let mut h: Vec<String> =
         ["iteration", "env_steps", "wall_time_s", "steps_per_s", "episodes", "mean_return", "mean_length"]
             .map(String::from)
@@ -20,21 +21,13 @@ pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String]) -> Vec<S
     h.push("mean_reward".into());
     h.extend(diagnostic_names.iter().cloned());
     h.extend(
-        [
-            "surrogate_loss",
-            "value_loss",
-            "entropy",
-            "kl",
-            "clip_fraction",
-            "grad_norm",
-            "learning_rate",
-            "action_std",
-            "env_time_s",
-            "inference_time_s",
-            "update_time_s",
-        ]
-        .map(String::from),
+        ["surrogate_loss", "value_loss", "entropy", "kl", "clip_fraction", "grad_norm", "learning_rate", "action_std"]
+            .map(String::from),
     );
+    if smoothness {
+        h.push("smoothness".into());
+    }
+    h.extend(["env_time_s", "inference_time_s", "update_time_s"].map(String::from));
     h
 }
 
@@ -58,9 +51,10 @@ struct TrainingRow<'a> {
     mean_reward: f64,
     #[serde(serialize_with = "each_fixed::<6, _>")]
     diagnostics: &'a [f64],
-    /// surrogate loss, value loss, entropy, KL, clip fraction, gradient norm, learning rate, action std.
+    /// surrogate loss, value loss, entropy, KL, clip fraction, gradient norm, learning rate, action std
+    /// and, when weighed, smoothness.
     #[serde(serialize_with = "each_fixed::<9, _>")]
-    update: [f64; 8],
+    update: Vec<f64>,
     /// environments, inference, update.
     #[serde(serialize_with = "each_fixed::<4, _>")]
     times_s: [f64; 3],
@@ -89,7 +83,10 @@ impl<'a> TrainingRow<'a> {
                 u.grad_norm,
                 u.learning_rate,
                 u.action_std,
-            ],
+            ]
+            .into_iter()
+            .chain(u.smoothness)
+            .collect(),
             times_s: [log.env_time_s, log.inference_time_s, log.update_time_s],
         }
     }
@@ -180,6 +177,7 @@ pub fn read_history(path: &Path) -> Result<Vec<IterationLog>, String> {
                 grad_norm: get("grad_norm"),
                 learning_rate: get("learning_rate"),
                 action_std: get("action_std"),
+                smoothness: column("smoothness").map(|_| get("smoothness")),
             },
             env_time_s: get("env_time_s"),
             inference_time_s: get("inference_time_s"),

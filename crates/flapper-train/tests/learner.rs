@@ -96,12 +96,13 @@ fn a_resumed_flight_run_equals_the_uninterrupted_one() {
 }
 
 #[test]
-fn the_action_rate_kernel_is_logged_when_weighted_and_older_logs_keep_their_columns() {
-    let columns = |weight: Option<f64>, name: &str| {
+fn the_action_rate_kernel_and_the_smoothness_are_logged_when_weighted_and_older_logs_keep_their_columns() {
+    let columns = |weight: Option<f64>, smoothness: f32, name: &str| {
         let mut config = small_flight_config(2, 5);
         if let Some(w) = weight {
             config.task.reward.action_rate_weight = w;
         }
+        config.ppo.smoothness_coef = smoothness;
         let dir = scratch_dir(name);
         train(&config, &dir, Start::Fresh);
         let text = std::fs::read_to_string(dir.join("training.csv")).unwrap();
@@ -110,13 +111,18 @@ fn the_action_rate_kernel_is_logged_when_weighted_and_older_logs_keep_their_colu
         let header = lines.next().unwrap();
         (header, lines.collect::<Vec<_>>())
     };
-    let (header, _) = columns(None, "no-action-rate");
+    let (header, _) = columns(None, 0.0, "no-action-rate");
     assert!(header.contains(&"r_energy".to_string()) && !header.contains(&"r_action_rate".to_string()));
-    let (header, rows) = columns(Some(0.2), "action-rate");
-    let column = header.iter().position(|h| h == "r_action_rate").expect("r_action_rate logged");
+    assert!(!header.contains(&"smoothness".to_string()));
+    let (header, rows) = columns(Some(0.2), 0.5, "action-rate");
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("{name} logged"));
+    let (rate, smoothness) = (column("r_action_rate"), column("smoothness"));
     for row in rows {
-        let value: f64 = row[column].parse().unwrap();
+        assert_eq!(row.len(), header.len());
+        let value: f64 = row[rate].parse().unwrap();
         assert!(value > 0.0 && value < 1.0, "r_action_rate {value}: exploration noise moves the action every step");
+        let value: f64 = row[smoothness].parse().unwrap();
+        assert!(value > 0.0, "smoothness {value}: a fresh policy's mean moves between steps");
     }
 }
 
