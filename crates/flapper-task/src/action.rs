@@ -85,9 +85,10 @@ pub struct ActionMap {
     frequency_hz: [f64; 2],
     differential_flap: f64,
     amplitude_max: f64,
-    /// Share of the way to a new amplitude, bias or roll covered per step (1 without the shape filter).
+    /// Share of the way to a new amplitude, bias, roll or wing pitch covered per step (1 without the
+    /// shape filter).
     shape_step_fraction: f64,
-    /// Largest change of amplitude, bias or roll per step (infinite without the rate limit).
+    /// Largest change of amplitude, bias, roll or wing pitch per step (infinite without the rate limit).
     shape_max_step: f64,
     control_period_s: f64,
 }
@@ -124,7 +125,7 @@ impl ActionMap {
         }
     }
 
-    /// One step of a shape channel (amplitude, bias or roll) from `current` towards `asked`: the
+    /// One step of a shape channel (amplitude, bias, roll or wing pitch) from `current` towards `asked`: the
     /// shape filter's share of the way, at most the rate limit's step.
     fn shape_step(&self, current: f64, asked: f64) -> f64 {
         current + (self.shape_step_fraction * (asked - current)).clamp(-self.shape_max_step, self.shape_max_step)

@@ -73,11 +73,11 @@ pub struct ControlConfig {
     /// The flap amplitude of a1 = +1 as a multiple of the flap limit (`flap_oscillator` only); the
     /// targets are clipped to the limit, so above 1 the stroke flattens towards a square wave.
     pub flap_amplitude_max: f64,
-    /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude, bias and roll
+    /// Cutoff (Hz) of a first-order filter on the oscillator's amplitude, bias and roll (and wing pitch)
     /// (`flap_oscillator` only); 0 applies them as given.
     pub flap_shape_filter_hz: f64,
-    /// Largest rate of change (action units per second) of the oscillator's amplitude, bias and roll
-    /// (`flap_oscillator` only); 0 leaves them free. Unlike the filter it delays no slow change: it
+    /// Largest rate of change (action units per second) of the oscillator's amplitude, bias and roll (and
+    /// wing pitch) (`flap_oscillator` only); 0 leaves them free. Unlike the filter it delays no slow change: it
     /// bounds how fast the stroke's shape moves, so a dither between steps shrinks to this rate.
     pub flap_shape_rate_limit: f64,
 }
