@@ -81,7 +81,7 @@ impl VecEnv for FlightEnvs {
 
     fn step(&mut self, actions: &[f32]) -> Result<(), EnvError> {
         self.inner.step(actions)?;
-        let per_env = self.diagnostics.len() / self.inner.len();
+        let per_env = REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate);
         for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
             let all = [t.position, t.body_rate, t.level, t.energy, t.action_rate];
             for (o, value) in out.iter_mut().zip(all) {
