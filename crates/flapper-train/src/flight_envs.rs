@@ -55,8 +55,15 @@ impl FlightEnvs {
         let logs_action_rate = task.reward.action_rate_weight > 0.0;
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
-        let per_env = REWARD_TERM_NAMES.len() + usize::from(logs_action_rate);
-        Ok(Self { diagnostics: vec![0.0; count * per_env], inner, logs_action_rate })
+        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate };
+        envs.diagnostics = vec![0.0; count * envs.logged_terms()];
+        Ok(envs)
+    }
+
+    /// How many reward kernels each environment logs: the four of [`REWARD_TERM_NAMES`], and
+    /// [`ACTION_RATE_TERM_NAME`] when weighed.
+    fn logged_terms(&self) -> usize {
+        REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate)
     }
 
     pub fn inner(&self) -> &FlightVecEnv {
@@ -81,7 +88,7 @@ impl VecEnv for FlightEnvs {
 
     fn step(&mut self, actions: &[f32]) -> Result<(), EnvError> {
         self.inner.step(actions)?;
-        let per_env = REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate);
+        let per_env = self.logged_terms();
         for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
             let all = [t.position, t.body_rate, t.level, t.energy, t.action_rate];
             for (o, value) in out.iter_mut().zip(all) {
