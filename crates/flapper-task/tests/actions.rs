@@ -11,8 +11,13 @@ use flapper_task::config::{ControlConfig, TaskConfig};
 const PERIOD_S: f64 = 0.02;
 
 fn action_map(mode: ActionMode) -> ActionMap {
+    map_for(ControlConfig { action_mode: mode, ..ControlConfig::default() })
+}
+
+/// The action map of `control` on the shipped robot.
+fn map_for(control: ControlConfig) -> ActionMap {
     let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
-    ActionMap::new(&sim, &ControlConfig { action_mode: mode, ..ControlConfig::default() }, PERIOD_S)
+    ActionMap::new(&sim, &control, PERIOD_S)
 }
 
 /// The targets of `steps` steps of one held action, and the phase after them.
@@ -187,10 +192,11 @@ fn an_amplitude_above_the_flap_limit_flattens_the_stroke_at_the_limit() {
 
 #[test]
 fn the_shape_filter_smooths_amplitude_bias_and_roll_but_not_the_tail() {
-    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
-    let control =
-        ControlConfig { action_mode: ActionMode::FlapOscillator, flap_shape_filter_hz: 2.0, ..Default::default() };
-    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let map = map_for(ControlConfig {
+        action_mode: ActionMode::FlapOscillator,
+        flap_shape_filter_hz: 2.0,
+        ..Default::default()
+    });
     let half = map.half_range_rad();
     let mut oscillator = OscillatorState::default();
     // A bias and a roll dithered at 25 Hz (+1, -1, ...) stay near their mean of 0; the tail does not.
@@ -221,10 +227,11 @@ fn the_shape_filter_smooths_amplitude_bias_and_roll_but_not_the_tail() {
 
 #[test]
 fn the_rate_limit_caps_how_fast_the_shape_moves_without_delaying_a_slow_change() {
-    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
-    let control =
-        ControlConfig { action_mode: ActionMode::FlapOscillator, flap_shape_rate_limit: 4.0, ..Default::default() };
-    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let map = map_for(ControlConfig {
+        action_mode: ActionMode::FlapOscillator,
+        flap_shape_rate_limit: 4.0,
+        ..Default::default()
+    });
     let max_step = 4.0 * PERIOD_S;
     // A bias and a roll dithered at 25 Hz (+1, -1, ...) move at most 0.08 per step: they stay within
     // one step of their start; the amplitude asked to go from 0 to 1 ramps at the rate.
@@ -248,14 +255,13 @@ fn the_rate_limit_caps_how_fast_the_shape_moves_without_delaying_a_slow_change()
 #[test]
 fn a_wing_pitch_second_action_pitches_both_wings_alike_at_a_fixed_frequency_and_starts_where_they_are() {
     use flapper_task::action::OscillatorA2;
-    let sim = RobotModel::flapper().unwrap().instantiate().unwrap();
     let control = ControlConfig {
         action_mode: ActionMode::FlapOscillator,
         oscillator_a2: OscillatorA2::WingPitch,
         flap_frequency_hz: [5.0, 6.0],
         ..Default::default()
     };
-    let map = ActionMap::new(&sim, &control, PERIOD_S);
+    let map = map_for(control);
     let half = map.half_range_rad();
     // Held wings: a2 adds to both pitches on top of the roll's differential.
     let (targets, _) = hold(&map, [-1.0, 0.3, 0.0, 0.1, 0.0], 5);
