@@ -60,6 +60,9 @@ pub struct Minibatch {
     /// Filled only with `smoothness_coef` above 0.
     pub neighbour_means: Vec<f32>,
     pub neighbours: Vec<u8>,
+    /// Each sample's weight of the smoothness term, as the environment gave it
+    /// ([`crate::VecEnv::smoothness_weights`]); empty when the environment gives none (every weight 1).
+    pub smoothness_weights: Vec<f32>,
 }
 
 /// The loss of one minibatch and its parts.
@@ -73,7 +76,8 @@ pub struct LossTerms {
     pub kl: f64,
     /// Fraction of samples whose ratio lies outside [1 - clip, 1 + clip].
     pub clip_fraction: f64,
-    /// Mean over samples of the squared distance of the actor's mean to its neighbours' collected means.
+    /// Mean over samples of the squared distance of the actor's mean to its neighbours' collected means,
+    /// each sample's weighted by its smoothness weight.
     pub smoothness: f64,
     /// surrogate + value_loss_coef value - entropy_coef entropy + smoothness_coef smoothness.
     pub total: f64,
@@ -173,12 +177,13 @@ fn policy_loss(
             log_std_grads[j] += d_log_prob * (diff * diff * inv_var[j] - 1.0);
         }
         if config.smoothness_coef > 0.0 {
+            let weight = batch.smoothness_weights.get(i).copied().unwrap_or(1.0);
             let neighbours = batch.neighbour_means[i * 2 * a_size..].chunks_exact(a_size);
             for neighbour in neighbours.take(batch.neighbours[i] as usize) {
                 for j in 0..a_size {
                     let gap = mu[j] - neighbour[j];
-                    terms.smoothness += (gap * gap) as f64;
-                    d_mean[i * a_size + j] += 2.0 * config.smoothness_coef * gap * inv_n;
+                    terms.smoothness += (weight * gap * gap) as f64;
+                    d_mean[i * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
                 }
             }
         }
@@ -286,6 +291,7 @@ mod tests {
             returns: (0..n).map(|_| rng.random_range(-1.0..1.0)).collect(),
             neighbour_means: (0..n * 2 * 3).map(|_| rng.random_range(-1.0..1.0)).collect(),
             neighbours: (0..n).map(|i| (i % 3) as u8).collect(),
+            smoothness_weights: Vec::new(),
         };
         (policy, config, batch)
     }
@@ -300,9 +306,12 @@ mod tests {
     }
 
     /// Central differences, relative error per tensor, as for the MLP.
-    fn check(clipped_value_loss: bool, smoothness_coef: f32) {
-        let (mut policy, mut config, batch) = setup(clipped_value_loss);
+    fn check(clipped_value_loss: bool, smoothness_coef: f32, weighted: bool) {
+        let (mut policy, mut config, mut batch) = setup(clipped_value_loss);
         config.smoothness_coef = smoothness_coef;
+        if weighted {
+            batch.smoothness_weights = (0..batch.size).map(|i| [0.0, 0.3, 1.0][i % 3]).collect();
+        }
         let mut grads = Gradients::zeros(&policy);
         let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
         assert!(
@@ -356,9 +365,10 @@ mod tests {
 
     #[test]
     fn ppo_loss_gradients_match_finite_differences() {
-        check(true, 0.0);
-        check(false, 0.0);
-        check(true, 0.7);
+        check(true, 0.0, false);
+        check(false, 0.0, false);
+        check(true, 0.7, false);
+        check(false, 0.7, true);
     }
 
     #[test]
@@ -392,6 +402,34 @@ mod tests {
         }
         let after = distance(&policy, &config, &batch);
         assert!(after.smoothness < 0.9 * before.smoothness, "{} -> {}", before.smoothness, after.smoothness);
+    }
+
+    #[test]
+    fn a_sample_weighted_zero_feels_no_smoothness_and_weights_of_one_change_nothing() {
+        let (policy, mut config, batch) = setup(false);
+        let run = |config: &PpoConfig, batch: &Minibatch| {
+            let mut grads = Gradients::zeros(&policy);
+            let terms = loss_and_gradients(&policy, config, batch, &mut LossScratch::default(), &mut grads, 1);
+            (terms, grads)
+        };
+        config.smoothness_coef = 0.0;
+        let (off, off_grads) = run(&config, &batch);
+        config.smoothness_coef = 1.0;
+        let (unweighted, unweighted_grads) = run(&config, &batch);
+        let ones = Minibatch { smoothness_weights: vec![1.0; batch.size], ..batch.clone() };
+        let (terms, grads) = run(&config, &ones);
+        assert_eq!(terms, unweighted);
+        assert_eq!(grads.actor, unweighted_grads.actor);
+        // Weight 0 on every sample: the loss and its gradients are those without the term.
+        let zeros = Minibatch { smoothness_weights: vec![0.0; batch.size], ..batch.clone() };
+        let (terms, grads) = run(&config, &zeros);
+        assert_eq!(terms.smoothness, 0.0);
+        assert_eq!(terms.total, off.total);
+        assert_eq!(grads.actor, off_grads.actor);
+        // Half the samples at 0: the term is what the other half carries.
+        let half = Minibatch { smoothness_weights: (0..batch.size).map(|i| (i % 2) as f32).collect(), ..batch.clone() };
+        let (terms, _) = run(&config, &half);
+        assert!(terms.smoothness > 0.0 && terms.smoothness < unweighted.smoothness, "{}", terms.smoothness);
     }
 
     #[test]

@@ -156,6 +156,15 @@ impl Ppo {
         }
         t.actions.clear();
         t.actions.extend_from_slice(actions);
+        t.smoothness_weights.clear();
+    }
+
+    /// Records the weight of the smoothness term for the actions `act` just chose (one per
+    /// environment; [`crate::VecEnv::smoothness_weights`]). Without a call every weight is 1.
+    pub fn weigh_smoothness(&mut self, weights: &[f32]) {
+        assert_eq!(weights.len(), self.storage.envs, "one smoothness weight per environment");
+        self.transition.smoothness_weights.clear();
+        self.transition.smoothness_weights.extend_from_slice(weights);
     }
 
     /// Records the environments' answer to the last `act` and stores the step's transition. A
@@ -270,6 +279,7 @@ impl Ppo {
         mb.returns.clear();
         mb.neighbour_means.clear();
         mb.neighbours.clear();
+        mb.smoothness_weights.clear();
         let smooth = self.config.smoothness_coef > 0.0;
         for &i in indices {
             if smooth {
@@ -281,6 +291,7 @@ impl Ppo {
                 }
                 mb.neighbour_means.resize(mb.neighbour_means.len() + (2 - count as usize) * a, 0.0);
                 mb.neighbours.push(count);
+                mb.smoothness_weights.push(s.smoothness_weights[i]);
             }
             mb.observations.extend_from_slice(&s.observations[i * o..(i + 1) * o]);
             mb.actions.extend_from_slice(&s.actions[i * a..(i + 1) * a]);

@@ -233,6 +233,9 @@ impl<E: VecEnv> Trainer<E> {
             for _ in 0..steps {
                 let t = Instant::now();
                 self.ppo.act(self.env.observations(), &mut actions);
+                if let Some(weights) = self.env.smoothness_weights() {
+                    self.ppo.weigh_smoothness(weights);
+                }
                 let t_env = Instant::now();
                 inference_time += (t_env - t).as_secs_f64();
                 self.env.step(&actions).map_err(TrainError::Env)?;

@@ -15,6 +15,8 @@ pub struct Transition {
     pub values: Vec<f32>,
     pub rewards: Vec<f32>,
     pub dones: Vec<bool>,
+    /// The weight of the smoothness term for each environment's action (empty: every weight 1).
+    pub smoothness_weights: Vec<f32>,
 }
 
 /// Read by the update; written only through [`RolloutStorage::add_transition`].
@@ -37,6 +39,8 @@ pub struct RolloutStorage {
     pub rewards: Vec<f32>,
     /// The episode ended (terminated or truncated) after this step.
     pub dones: Vec<bool>,
+    /// The weight of the smoothness term for each sample (1 where the environment gives none).
+    pub smoothness_weights: Vec<f32>,
     pub advantages: Vec<f32>,
     pub returns: Vec<f32>,
     filled: usize,
@@ -57,6 +61,7 @@ impl RolloutStorage {
             values: vec![0.0; n],
             rewards: vec![0.0; n],
             dones: vec![false; n],
+            smoothness_weights: vec![1.0; n],
             advantages: vec![0.0; n],
             returns: vec![0.0; n],
             filled: 0,
@@ -91,6 +96,11 @@ impl RolloutStorage {
         self.log_probs[rows.clone()].copy_from_slice(&t.log_probs);
         self.values[rows.clone()].copy_from_slice(&t.values);
         self.rewards[rows.clone()].copy_from_slice(&t.rewards);
+        if t.smoothness_weights.is_empty() {
+            self.smoothness_weights[rows.clone()].fill(1.0);
+        } else {
+            self.smoothness_weights[rows.clone()].copy_from_slice(&t.smoothness_weights);
+        }
         self.dones[rows].copy_from_slice(&t.dones);
         self.filled += 1;
     }
@@ -160,6 +170,7 @@ mod tests {
                 values: vec![values[k]],
                 rewards: vec![rewards[k]],
                 dones: vec![dones[k]],
+                smoothness_weights: Vec::new(),
             });
         }
         assert!(s.is_full());
@@ -177,9 +188,11 @@ mod tests {
             values: vec![v; 2],
             rewards: vec![v; 2],
             dones: vec![v > 1.5; 2],
+            smoothness_weights: if v > 1.5 { vec![0.25, 0.0] } else { Vec::new() },
         };
         s.add_transition(&step(1.0));
         s.add_transition(&step(2.0));
+        assert_eq!(s.smoothness_weights, [1.0, 1.0, 0.25, 0.0], "none given: 1");
         assert_eq!(s.observations, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0]);
         assert_eq!(s.rewards, [1.0, 1.0, 2.0, 2.0]);
         assert_eq!(s.dones, [false, false, true, true]);
@@ -199,6 +212,7 @@ mod tests {
                 values: vec![0.0; 2],
                 rewards: vec![0.0; 2],
                 dones: vec![false, step == 0],
+                smoothness_weights: Vec::new(),
             });
         }
         // Rows: step * 2 + env.

@@ -46,6 +46,12 @@ pub trait VecEnv {
     /// For each truncated environment, its last observation before the reset (other rows unspecified).
     fn final_observations(&self) -> &[f32];
 
+    /// The weight of the learner's smoothness term (`ppo.smoothness_coef`) for the action about to be
+    /// chosen at each environment's current observation, or `None` for 1 everywhere (the default).
+    fn smoothness_weights(&self) -> Option<&[f32]> {
+        None
+    }
+
     /// Episodes finished since the last call.
     fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord<Self::EndReason>>;
 

@@ -111,6 +111,11 @@ pub struct RewardConfig {
     pub action_rate_weight: f64,
     /// Norm of the step-to-step change of the applied action at which r_action_rate falls to 1/e.
     pub action_rate_scale: f64,
+    /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
+    /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
+    /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
+    /// paths and manoeuvres may change it quickly; 0 weighs every step 1.
+    pub smoothness_turn_scale_degps: f64,
 }
 
 /// Paper III-F: 30 s episodes, 3 m error termination, attitude termination in stages 1-2.
@@ -247,6 +252,7 @@ impl Default for RewardConfig {
             energy_scale_w: 20.0,
             action_rate_weight: 0.0,
             action_rate_scale: 1.0,
+            smoothness_turn_scale_degps: 0.0,
         }
     }
 }
@@ -434,6 +440,7 @@ impl TaskConfig {
             ("reward.energy_weight", r.energy_weight, 0.0, 1e3),
             ("reward.action_rate_weight", r.action_rate_weight, 0.0, 1e3),
             ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
+            ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -605,6 +612,9 @@ mod tests {
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
         let err = TaskConfig::from_toml("[reward]\naction_rate_weight = -1\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
+        let err =
+            TaskConfig::from_toml("[reward]\nsmoothness_turn_scale_degps = -30\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reward.smoothness_turn_scale_degps") && err.contains("-30"), "{err}");
         let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();

@@ -313,6 +313,18 @@ impl FlightEnv {
         self.observation.write(&self.reference, self.step, sim.base_position_m(), sim.orientation(), out);
     }
 
+    /// The weight of the learner's smoothness term for the action chosen at the current observation:
+    /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
+    /// `reward.smoothness_turn_scale_degps`; 1 where that is 0.
+    pub fn smoothness_weight(&self) -> f32 {
+        let scale = self.config.reward.smoothness_turn_scale_degps;
+        if scale <= 0.0 {
+            return 1.0;
+        }
+        let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
+        (-(turn / scale).powi(2)).exp() as f32
+    }
+
     /// The finished episode's summary (call when `step` reported an end, before `reset`).
     pub fn episode_info(&self, end: EpisodeEnd) -> EpisodeInfo {
         EpisodeInfo {

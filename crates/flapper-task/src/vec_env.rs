@@ -38,6 +38,8 @@ pub struct FlightVecEnv {
     terminated: Vec<bool>,
     truncated: Vec<bool>,
     terms: Vec<RewardTerms>,
+    /// Each environment's weight of the learner's smoothness term at its current observation.
+    smoothness_weights: Vec<f32>,
     finished: Vec<EpisodeInfo>,
     simulation_faults: u64,
 }
@@ -74,6 +76,7 @@ impl FlightVecEnv {
             terminated: vec![false; count],
             truncated: vec![false; count],
             terms: vec![RewardTerms::default(); count],
+            smoothness_weights: vec![1.0; count],
             finished: Vec::new(),
             simulation_faults: 0,
         };
@@ -87,6 +90,13 @@ impl FlightVecEnv {
         self.pool.install(|| {
             envs.par_iter().zip(observations.par_chunks_mut(size)).for_each(|(env, out)| env.observe(out));
         });
+        self.weigh_smoothness();
+    }
+
+    fn weigh_smoothness(&mut self) {
+        for (weight, env) in self.smoothness_weights.iter_mut().zip(&self.envs) {
+            *weight = env.smoothness_weight();
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -149,6 +159,7 @@ impl FlightVecEnv {
                 self.finished.push(info);
             }
         }
+        self.weigh_smoothness();
         Ok(())
     }
 
@@ -237,6 +248,12 @@ impl FlightVecEnv {
 
     pub fn rewards(&self) -> &[f32] {
         &self.rewards
+    }
+
+    /// Each environment's weight of the learner's smoothness term for the action chosen at its
+    /// current observation ([`FlightEnv::smoothness_weight`]).
+    pub fn smoothness_weights(&self) -> &[f32] {
+        &self.smoothness_weights
     }
 
     pub fn terminated(&self) -> &[bool] {

@@ -420,3 +420,26 @@ fn a_reference_sampled_at_another_step_than_the_control_period_is_refused() {
     assert!(env.set_reference_source(at(2.0 * period)).is_err());
     assert!(env.set_reference_source(at(period)).is_ok());
 }
+
+#[test]
+fn the_smoothness_weight_is_one_without_its_scale_and_falls_where_the_reference_turns() {
+    let reference = Arc::new(named("loop", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.62).unwrap());
+    let weights = |scale: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.episode.max_position_error_m = 1000.0;
+        config.reward.smoothness_turn_scale_degps = scale;
+        let mut env =
+            FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference.clone()), 1, 0).unwrap();
+        let mut weights = vec![env.smoothness_weight()];
+        while env.step(&[0.0; 5]).end.is_none() {
+            weights.push(env.smoothness_weight());
+        }
+        weights
+    };
+    assert!(weights(0.0).iter().all(|&w| w == 1.0));
+    let weighted = weights(30.0);
+    // 3 s of cruise (150 steps), the loop from 3 to 6 s: weight 1 until the 0.6 s lookahead reaches it.
+    assert!(weighted[..115].iter().all(|&w| (w - 1.0).abs() < 1e-6), "{:?}", &weighted[..120]);
+    assert!(weighted[160..290].iter().all(|&w| w < 1e-3), "{:?}", &weighted[160..290]);
+    assert!(weighted.iter().all(|w| (0.0..=1.0).contains(w)));
+}

@@ -212,3 +212,35 @@ fn resolve_finds_names_and_files_and_lists_the_names_when_it_cannot() {
     assert_eq!(from_file.len(), 101);
     assert!(resolve("/nowhere/path.csv", 0.02, 30).unwrap_err().to_string().contains("/nowhere/path.csv"));
 }
+
+#[test]
+fn the_fastest_turn_is_zero_on_straight_paths_and_the_circles_rate_on_a_circle() {
+    // A straight climb at 20 deg, speed changing: no turn.
+    let climb: Vec<Vec3> = (0..200)
+        .map(|k| {
+            let s = 0.02 * k as f64 * (3.0 + 0.01 * k as f64);
+            Vec3::new(s * 20f64.to_radians().cos(), 0.0, s * 20f64.to_radians().sin())
+        })
+        .collect();
+    let climb = flapper_task::reference::Reference::new("climb", DT, climb);
+    assert!(climb.fastest_turn_degps(0, 150) < 1e-3, "{}", climb.fastest_turn_degps(0, 150));
+    // Straight for 1 s, then a vertical circle at 90 deg/s: the window sees the turn only once it reaches it.
+    let rate = 90f64.to_radians();
+    let (speed, radius) = (3.8, 3.8 / rate);
+    let mut points: Vec<Vec3> = (0..50).map(|k| Vec3::new(speed * DT * k as f64, 0.0, 0.0)).collect();
+    let start = *points.last().unwrap();
+    points.extend((1..200).map(|k| {
+        let angle = rate * DT * k as f64;
+        start + Vec3::new(radius * angle.sin(), 0.0, radius * (1.0 - angle.cos()))
+    }));
+    let circle = flapper_task::reference::Reference::new("circle", DT, points);
+    assert!(circle.fastest_turn_degps(0, 30) < 1e-3, "straight ahead for the whole window");
+    let on_circle = circle.fastest_turn_degps(60, 30);
+    assert!((on_circle - 90.0).abs() < 0.5, "{on_circle}");
+    assert!((circle.fastest_turn_degps(30, 30) - 90.0).abs() < 0.5, "the window reaches the circle");
+    // The named loop turns 360 deg in 3 s; its cruise before does not turn.
+    let looping = named("loop", Vec3::ZERO, DT, 0.0).unwrap();
+    assert!(looping.fastest_turn_degps(0, 30) < 1e-3);
+    let fastest = looping.fastest_turn_degps(0, looping.len());
+    assert!((110.0..200.0).contains(&fastest), "{fastest}");
+}

@@ -40,6 +40,8 @@ pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
     logs_action_rate: bool,
+    /// `reward.smoothness_turn_scale_degps` above 0: the learner's smoothness term is weighted per step.
+    weighs_smoothness: bool,
 }
 
 impl FlightEnvs {
@@ -53,9 +55,10 @@ impl FlightEnvs {
         threads: usize,
     ) -> Result<Self, ModelError> {
         let logs_action_rate = task.reward.action_rate_weight > 0.0;
+        let weighs_smoothness = task.reward.smoothness_turn_scale_degps > 0.0;
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
-        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate };
+        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate, weighs_smoothness };
         envs.diagnostics = vec![0.0; count * envs.logged_terms()];
         Ok(envs)
     }
@@ -116,6 +119,10 @@ impl VecEnv for FlightEnvs {
 
     fn final_observations(&self) -> &[f32] {
         self.inner.final_observations()
+    }
+
+    fn smoothness_weights(&self) -> Option<&[f32]> {
+        self.weighs_smoothness.then(|| self.inner.smoothness_weights())
     }
 
     fn take_finished_episodes(&mut self) -> Vec<EpisodeRecord<FlightEnd>> {

@@ -373,3 +373,26 @@ fn evaluation_reads_the_same_task_from_a_policy_as_training_saved() {
         assert_eq!(evaluated, trained, "stage {stage}");
     }
 }
+
+#[test]
+fn flight_environments_weigh_the_smoothness_only_when_asked_and_by_the_turns_ahead() {
+    use flapper_ppo::VecEnv;
+    let robot = RobotModel::flapper().unwrap();
+    let mut task = flapper_task::TaskConfig::stage(3).unwrap();
+    let unweighted = flapper_train::FlightEnvs::new(&robot, task.clone(), 4, 5, 1).unwrap();
+    assert!(unweighted.smoothness_weights().is_none(), "without the scale every weight is 1");
+    task.reward.smoothness_turn_scale_degps = 30.0;
+    task.episode.max_position_error_m = 1e3; // the unpowered robot falls; its references run on
+    let mut envs = flapper_train::FlightEnvs::new(&robot, task, 16, 5, 1).unwrap();
+    let actions = vec![0.0f32; 16 * envs.action_size()];
+    let mut weights = Vec::new();
+    for _ in 0..500 {
+        weights.extend_from_slice(envs.smoothness_weights().unwrap());
+        envs.step(&actions).unwrap();
+    }
+    assert!(weights.iter().all(|w| (0.0..=1.0).contains(w)));
+    // Stage 3's references hold straight commands and turn, loop and sharply turn between them.
+    let straight = weights.iter().filter(|&&w| w > 0.999).count();
+    let turning = weights.iter().filter(|&&w| w < 0.5).count();
+    assert!(straight > weights.len() / 10 && turning > weights.len() / 50, "{straight} straight, {turning} turning");
+}

@@ -100,6 +100,17 @@ impl Reference {
         (b - a).length() / self.dt_s
     }
 
+    /// The fastest turn of the direction of travel (deg/s) between consecutive steps over the `steps`
+    /// steps from `step` on (0 for a straight path, whatever its slope or speed).
+    pub fn fastest_turn_degps(&self, step: usize, steps: usize) -> f64 {
+        (step..step + steps)
+            .map(|k| {
+                let (a, b) = (self.direction(k), self.direction(k + 1));
+                a.cross(b).length().atan2(a.dot(b)).to_degrees() / self.dt_s
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// The slowest and the fastest speed along the path (m/s).
     pub fn speed_range_mps(&self) -> [f64; 2] {
         (0..self.points.len().saturating_sub(1))
