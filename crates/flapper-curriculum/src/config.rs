@@ -381,6 +381,19 @@ task = { stage = 2 }
     }
 
     #[test]
+    fn the_oscillator_recipe_reads_with_stage_3_in_two_parts() {
+        // configs/curriculum-oscillator.toml: the flight-modes experiment of docs/experiments.md (OSC14, OSC15).
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/curriculum-oscillator.toml");
+        let c = CurriculumConfig::load(&path).unwrap();
+        let stages: Vec<u8> = (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect();
+        assert_eq!(stages, [1, 2, 3, 3, 4]);
+        let smoothness: Vec<f32> =
+            (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().ppo.smoothness_coef).collect();
+        assert_eq!(smoothness, [0.3, 0.3, 0.0, 0.0, 0.03]);
+        assert_eq!(c.stage_train_config(4).unwrap().runner.init_from_noise_std, Some(0.4), "the noise restarted");
+    }
+
+    #[test]
     fn mistakes_anywhere_are_refused_before_training_naming_the_stage() {
         let err = |from: &str, to: &str| {
             let text = TINY.replacen(from, to, 1);
