@@ -2,7 +2,8 @@
 //! start and from most randomized starts, close to the path; stage 3 flies the turns of `lateral` and
 //! the `loop` from randomized starts; the hand-chained stage 4 the aerobatic chain and the sharp turn;
 //! the final controller (`policies/final`, from `flapper curriculum`) the aerobatic chain, the loop
-//! and the lateral turns. This guards every later change to the model, the task or the learner (a
+//! and the lateral turns; the flight-modes candidate (`policies/smooth`) longitudinal on little energy
+//! and the aerobatic chain. This guards every later change to the model, the task or the learner (a
 //! change that breaks the learned flight fails here).
 
 use std::path::PathBuf;
@@ -106,4 +107,16 @@ fn the_final_controller_flies_the_aerobatic_chain_the_loop_and_the_lateral_turns
     check_flies_the_aerobatic_chain("final");
     check_tracks("final", "loop", 4, 3, 1.0);
     check_tracks("final", "lateral", 4, 4, 0.4);
+}
+
+#[test]
+fn the_flight_modes_candidate_flies_longitudinal_on_a_third_of_the_final_controllers_energy() {
+    // policies/smooth (configs/stage4-smooth.toml; seed 11, 100 episodes): longitudinal 100/100 at RMS
+    // 0.299 m and 3.59 J/m (the final controller 13.03, the scripted gait 2.40), the aerobatic chain 98/100.
+    let results = check_tracks("smooth", "longitudinal", 4, 4, 0.5);
+    for r in &results {
+        let energy = r.energy_per_metre_j(0.02);
+        assert!(energy < 4.8, "policies/smooth on longitudinal: {energy:.2} J/m, over twice the scripted gait's");
+    }
+    check_flies_the_aerobatic_chain("smooth");
 }
