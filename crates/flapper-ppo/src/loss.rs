@@ -77,7 +77,7 @@ pub struct LossTerms {
     /// Fraction of samples whose ratio lies outside [1 - clip, 1 + clip].
     pub clip_fraction: f64,
     /// Mean over samples of the squared distance of the actor's mean to its neighbours' collected means,
-    /// each sample's weighted by its smoothness weight.
+    /// each sample's distance weighted by its smoothness weight.
     pub smoothness: f64,
     /// surrogate + value_loss_coef value - entropy_coef entropy + smoothness_coef smoothness.
     pub total: f64,
