@@ -103,10 +103,14 @@ impl Reference {
     /// The fastest turn of the direction of travel (deg/s) between consecutive steps over the `steps`
     /// steps from `step` on (0 for a straight path, whatever its slope or speed).
     pub fn fastest_turn_degps(&self, step: usize, steps: usize) -> f64 {
-        (step..step + steps)
+        // Each direction once: every step's training environments ask this over the whole lookahead.
+        let mut before = self.direction(step);
+        (step + 1..=step + steps)
             .map(|k| {
-                let (a, b) = (self.direction(k), self.direction(k + 1));
-                a.cross(b).length().atan2(a.dot(b)).to_degrees() / self.dt_s
+                let after = self.direction(k);
+                let turn = before.cross(after).length().atan2(before.dot(after));
+                before = after;
+                turn.to_degrees() / self.dt_s
             })
             .fold(0.0, f64::max)
     }
