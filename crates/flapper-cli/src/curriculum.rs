@@ -54,12 +54,12 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
 
 fn report_progress(event: Progress) {
     match event {
-        Progress::StageStarts { stage, of, config, resumed_at } => {
+        Progress::StageStarts { stage, of, config, iterations, resumed_at } => {
             let from = if resumed_at > 0 { format!(", resuming at iteration {resumed_at}") } else { String::new() };
             println!(
                 "stage {stage}/{of} ({}): up to {} iterations, validated every {}; gate: {}{from}",
                 config.name,
-                config.max_iterations,
+                iterations,
                 config.validate_every,
                 describe_gate(&config.gate)
             );

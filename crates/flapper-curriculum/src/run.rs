@@ -50,6 +50,10 @@ pub enum CurriculumError {
         best: String,
         dir: PathBuf,
     },
+    #[error(
+        "stage {stage} ('{name}') cannot start: the curriculum's max_env_steps ({budget}) leaves {left} environment steps after the stages before it, {iterations} iterations, and the stage needs at least {needed} (one validation interval, or its gate's min_iterations); raise max_env_steps or lower an earlier stage's max_iterations"
+    )]
+    BudgetSpent { stage: usize, name: String, budget: u64, left: u64, iterations: usize, needed: usize },
     #[error(transparent)]
     Run(#[from] RunError),
     #[error(transparent)]
@@ -76,10 +80,26 @@ pub struct CurriculumRequest<'a> {
 
 /// Progress the caller may show: a stage starting, each iteration, each validation.
 pub enum Progress<'a> {
-    StageStarts { stage: usize, of: usize, config: &'a StageConfig, resumed_at: usize },
-    Iteration { stage: usize, log: &'a IterationLog },
-    Validated { stage: usize, row: &'a Validated, gate_met: bool },
-    StageDone { outcome: &'a StageOutcome },
+    /// `iterations`: the stage's budget, its `max_iterations` or less where the run's `max_env_steps` says so.
+    StageStarts {
+        stage: usize,
+        of: usize,
+        config: &'a StageConfig,
+        iterations: usize,
+        resumed_at: usize,
+    },
+    Iteration {
+        stage: usize,
+        log: &'a IterationLog,
+    },
+    Validated {
+        stage: usize,
+        row: &'a Validated,
+        gate_met: bool,
+    },
+    StageDone {
+        outcome: &'a StageOutcome,
+    },
 }
 
 /// Runs (or continues) the curriculum; returns the stages done.
@@ -96,7 +116,8 @@ pub fn run_curriculum(
     let mut outcomes: Vec<StageOutcome> = Vec::new();
     for number in 1..=last {
         let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
-        let result = run_stage(robot, &config, dir, number, previous, progress);
+        let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
+        let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
         if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
             // The summary of a stopped run counts the stage that stopped it.
             let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
@@ -159,12 +180,14 @@ fn lock(dir: &Path) -> Result<std::fs::File, CurriculumError> {
 }
 
 /// One stage: read back if done, else train (fresh, from the previous stage, or resumed), judge, select.
+/// `spent_env_steps`: what the stages before it spent, against the curriculum's `max_env_steps`.
 fn run_stage(
     robot: &RobotModel,
     config: &CurriculumConfig,
     dir: &Path,
     number: usize,
     previous: Option<PathBuf>,
+    spent_env_steps: u64,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<StageOutcome, CurriculumError> {
     let here = stage_dir(dir, number);
@@ -174,7 +197,20 @@ fn run_stage(
             .map_err(|message| CurriculumError::File { path: outcome_path.clone(), message });
     }
     let stage = &config.stages[number - 1];
-    let train_config = config.stage_train_config(number).map_err(RunError::from)?;
+    let mut train_config = config.stage_train_config(number).map_err(RunError::from)?;
+    let iterations = config.stage_iterations(number, spent_env_steps).map_err(RunError::from)?;
+    let needed = stage.gate.min_iterations.max(stage.validate_every);
+    if iterations < needed {
+        return Err(CurriculumError::BudgetSpent {
+            stage: number,
+            name: stage.name.clone(),
+            budget: config.max_env_steps.unwrap_or(u64::MAX),
+            left: config.max_env_steps.unwrap_or(u64::MAX).saturating_sub(spent_env_steps),
+            iterations,
+            needed,
+        });
+    }
+    train_config.runner.iterations = iterations;
     let set =
         ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?;
     let names = set.names();
@@ -186,7 +222,7 @@ fn run_stage(
     // Done training: the final policy is written, or the budget is spent, or the gate was met before
     // the last checkpoint (the run stops one iteration after the validation that meets it).
     let finished = here.join("policy.safetensors").exists()
-        || resumed_at.is_some_and(|at| at >= stage.max_iterations || selection.gate_met_before(&stage.gate, at));
+        || resumed_at.is_some_and(|at| at >= iterations || selection.gate_met_before(&stage.gate, at));
     // Judge what is saved but not judged (an interruption between a checkpoint and its validation);
     // rows after the last checkpoint belong to iterations the resumed run will do again.
     selection.truncate_after(resumed_at.unwrap_or(0));
@@ -207,6 +243,7 @@ fn run_stage(
             stage: number,
             of: config.stages.len(),
             config: stage,
+            iterations,
             resumed_at: resumed_at.unwrap_or(0),
         });
         let start = match (resumed_at, &previous) {

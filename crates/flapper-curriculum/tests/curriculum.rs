@@ -291,3 +291,36 @@ fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+#[test]
+fn the_runs_step_budget_shortens_a_stage_and_stops_one_it_leaves_too_little() {
+    // 64 steps = 2 iterations of 4 x 8: stage 1 (max_iterations 4) is cut to its first validation
+    // interval and hands over; stage 2 (at least 4 iterations, its min_iterations) is not started.
+    let dir = scratch("budget");
+    let text = TINY.replacen("seed = 5", "seed = 5\nmax_env_steps = 64", 1);
+    let e = run(&dir, &text, None).unwrap_err();
+    assert!(
+        e.contains("stage 2 ('climb and dive') cannot start")
+            && e.contains("max_env_steps (64)")
+            && e.contains("leaves 0 environment steps")
+            && e.contains("at least 4"),
+        "{e}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let stages = summary["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 1, "{summary}");
+    assert!(stages[0]["iterations"].as_u64().unwrap() <= 2, "{summary}");
+    assert!(summary["total_env_steps"].as_u64().unwrap() <= 64, "{summary}");
+    assert!(!stage_dir(&dir, 2).exists(), "stage 2 was not started");
+    assert_eq!(run(&dir, &text, None).unwrap_err(), e, "running again reports the same");
+    // A budget the stages fit in changes nothing: the same files as a run without one.
+    let roomy = scratch("budget-roomy");
+    let whole = scratch("budget-none");
+    assert_eq!(run(&roomy, &TINY.replacen("seed = 5", "seed = 5\nmax_env_steps = 1000", 1), None).unwrap(), 2);
+    assert_eq!(run(&whole, TINY, None).unwrap(), 2);
+    same_run(&whole, &roomy);
+    for dir in [dir, roomy, whole] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
