@@ -116,7 +116,14 @@ pub struct RewardConfig {
     /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
     /// paths and manoeuvres may change it quickly; 0 weighs every step 1.
     pub smoothness_turn_scale_degps: f64,
+    /// Weighs the smoothness term by the reference's speed too: 1 at or above this speed (m/s), falling
+    /// linearly to 0 at [`SMOOTHNESS_SPEED_RAMP_MPS`] below it, so that slow flight, which needs a fast
+    /// stroke and quick corrections, is not asked for a steady one; 0 weighs every speed 1.
+    pub smoothness_min_speed_mps: f64,
 }
+
+/// Over how much speed below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0 (m/s).
+pub const SMOOTHNESS_SPEED_RAMP_MPS: f64 = 0.5;
 
 /// Paper III-F: 30 s episodes, 3 m error termination, attitude termination in stages 1-2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -253,6 +260,7 @@ impl Default for RewardConfig {
             action_rate_weight: 0.0,
             action_rate_scale: 1.0,
             smoothness_turn_scale_degps: 0.0,
+            smoothness_min_speed_mps: 0.0,
         }
     }
 }
@@ -441,6 +449,7 @@ impl TaskConfig {
             ("reward.action_rate_weight", r.action_rate_weight, 0.0, 1e3),
             ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
+            ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -615,6 +624,9 @@ mod tests {
         let err =
             TaskConfig::from_toml("[reward]\nsmoothness_turn_scale_degps = -30\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reward.smoothness_turn_scale_degps") && err.contains("-30"), "{err}");
+        let err =
+            TaskConfig::from_toml("[reward]\nsmoothness_min_speed_mps = -3\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reward.smoothness_min_speed_mps") && err.contains("-3"), "{err}");
         let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();

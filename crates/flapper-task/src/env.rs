@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
-use crate::config::TaskConfig;
+use crate::config::{SMOOTHNESS_SPEED_RAMP_MPS, TaskConfig};
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
@@ -315,14 +315,20 @@ impl FlightEnv {
 
     /// The weight of the learner's smoothness term for the action chosen at the current observation:
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
-    /// `reward.smoothness_turn_scale_degps`; 1 where that is 0.
+    /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
+    /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0).
     pub fn smoothness_weight(&self) -> f32 {
-        let scale = self.config.reward.smoothness_turn_scale_degps;
-        if scale <= 0.0 {
-            return 1.0;
+        let reward = &self.config.reward;
+        let mut weight = 1.0;
+        if reward.smoothness_turn_scale_degps > 0.0 {
+            let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
+            weight *= (-(turn / reward.smoothness_turn_scale_degps).powi(2)).exp();
         }
-        let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
-        (-(turn / scale).powi(2)).exp() as f32
+        if reward.smoothness_min_speed_mps > 0.0 {
+            let below = reward.smoothness_min_speed_mps - self.reference.speed(self.step);
+            weight *= (1.0 - below / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0);
+        }
+        weight as f32
     }
 
     /// The finished episode's summary (call when `step` reported an end, before `reset`).

@@ -443,3 +443,28 @@ fn the_smoothness_weight_is_one_without_its_scale_and_falls_where_the_reference_
     assert!(weighted[160..290].iter().all(|&w| w < 1e-3), "{:?}", &weighted[160..290]);
     assert!(weighted.iter().all(|w| (0.0..=1.0).contains(w)));
 }
+
+#[test]
+fn the_smoothness_weight_falls_below_its_speed_and_multiplies_the_turns_weight() {
+    // Straight level paths at 2.9, 3.25 and 3.8 m/s, 2 s each (dt 0.02 s).
+    let level = |speed: f64| {
+        let points = (0..=100).map(|k| Vec3::new(speed * 0.02 * k as f64, 0.0, 10.0)).collect();
+        Arc::new(Reference::new(format!("level {speed}"), 0.02, points))
+    };
+    let first_weight = |reference: Arc<Reference>, min_speed: f64, turn_scale: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.smoothness_min_speed_mps = min_speed;
+        config.reward.smoothness_turn_scale_degps = turn_scale;
+        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        env.smoothness_weight()
+    };
+    assert_eq!(first_weight(level(2.9), 0.0, 0.0), 1.0, "off: every speed weighs 1");
+    assert_eq!(first_weight(level(2.9), 3.5, 0.0), 0.0, "0.6 m/s below: past the 0.5 m/s ramp");
+    assert!((first_weight(level(3.25), 3.5, 0.0) - 0.5).abs() < 1e-4, "halfway down the ramp");
+    assert_eq!(first_weight(level(3.8), 3.5, 0.0), 1.0, "above the speed");
+    // With the turn weight too: on the loop's approach (3.8 m/s, straight) both are 1; where the loop
+    // turns the product is as small as the turn weight alone.
+    let looping = Arc::new(named("loop", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.62).unwrap());
+    assert_eq!(first_weight(looping.clone(), 3.5, 30.0), 1.0);
+    assert!(first_weight(level(3.25), 3.5, 30.0) > 0.49, "a straight path: only the speed ramp weighs");
+}
