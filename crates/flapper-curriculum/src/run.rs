@@ -78,28 +78,13 @@ pub struct CurriculumRequest<'a> {
     pub command: String,
 }
 
-/// Progress the caller may show: a stage starting, each iteration, each validation.
+/// Progress the caller may show: a stage starting (with its budget in `iterations`: its `max_iterations`,
+/// or less where the run's `max_env_steps` says so), each iteration, each validation.
 pub enum Progress<'a> {
-    /// `iterations`: the stage's budget, its `max_iterations` or less where the run's `max_env_steps` says so.
-    StageStarts {
-        stage: usize,
-        of: usize,
-        config: &'a StageConfig,
-        iterations: usize,
-        resumed_at: usize,
-    },
-    Iteration {
-        stage: usize,
-        log: &'a IterationLog,
-    },
-    Validated {
-        stage: usize,
-        row: &'a Validated,
-        gate_met: bool,
-    },
-    StageDone {
-        outcome: &'a StageOutcome,
-    },
+    StageStarts { stage: usize, of: usize, config: &'a StageConfig, iterations: usize, resumed_at: usize },
+    Iteration { stage: usize, log: &'a IterationLog },
+    Validated { stage: usize, row: &'a Validated, gate_met: bool },
+    StageDone { outcome: &'a StageOutcome },
 }
 
 /// Runs (or continues) the curriculum; returns the stages done.
@@ -200,12 +185,14 @@ fn run_stage(
     let mut train_config = config.stage_train_config(number).map_err(RunError::from)?;
     let iterations = config.stage_iterations(number, spent_env_steps).map_err(RunError::from)?;
     let needed = stage.gate.min_iterations.max(stage.validate_every);
-    if iterations < needed {
+    if let Some(budget) = config.max_env_steps
+        && iterations < needed
+    {
         return Err(CurriculumError::BudgetSpent {
             stage: number,
             name: stage.name.clone(),
-            budget: config.max_env_steps.unwrap_or(u64::MAX),
-            left: config.max_env_steps.unwrap_or(u64::MAX).saturating_sub(spent_env_steps),
+            budget,
+            left: budget.saturating_sub(spent_env_steps),
             iterations,
             needed,
         });
