@@ -385,16 +385,15 @@ task = { stage = 2 }
         assert_eq!(again, c, "the saved curriculum reads back as it was");
     }
 
-    #[test]
-    fn the_shipped_curriculum_reads_and_fits_the_papers_budget_with_room_for_every_stage() {
-        let file = "curriculum.toml";
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(file);
-        let c = CurriculumConfig::load(&path).unwrap();
-        let stages: Vec<u8> = (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect();
-        assert_eq!(stages, [1, 2, 3, 4, 4], "{file}: the paper's four stages in order, then the flight modes");
+    fn shipped(file: &str) -> CurriculumConfig {
+        CurriculumConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(file)).unwrap()
+    }
+
+    /// The run's budget is set, within the paper's 30 M steps, and leaves every stage room to start after
+    /// the shortest stages before it (each at its gate's `min_iterations` or one validation interval).
+    fn check_budget(c: &CurriculumConfig, file: &str) {
         let budget = c.max_env_steps.expect("the run's budget is set");
         assert!(budget <= 30_000_000, "{file}: the budget is {budget} environment steps, over the paper's 30 M");
-        // Every stage can start after the shortest stages before it (each at its gate's min_iterations).
         let mut shortest = 0;
         for k in 1..=c.stages.len() {
             let stage = &c.stages[k - 1];
@@ -403,17 +402,40 @@ task = { stage = 2 }
             let t = c.stage_train_config(k).unwrap();
             shortest += (needed * t.runner.envs * t.ppo.steps_per_env) as u64;
         }
+    }
+
+    fn task_stages(c: &CurriculumConfig) -> Vec<u8> {
+        (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect()
+    }
+
+    #[test]
+    fn the_shipped_curriculum_reads_and_fits_the_papers_budget() {
+        let c = shipped("curriculum.toml");
+        assert_eq!(task_stages(&c), [1, 2, 3, 4], "the paper's four stages in order");
+        check_budget(&c, "curriculum.toml");
+    }
+
+    #[test]
+    fn the_flight_modes_recipe_is_the_shipped_curriculum_and_one_stage_more() {
+        // configs/curriculum-flight-modes.toml: the experiment of docs/experiments.md ("The flight-modes
+        // stage in the curriculum"); its first four stages must not drift from the shipped ones.
+        let (c, four) = (shipped("curriculum-flight-modes.toml"), shipped("curriculum.toml"));
+        assert_eq!(task_stages(&c), [1, 2, 3, 4, 4]);
+        assert_eq!(
+            (c.seed, c.max_env_steps, &c.runner, &c.ppo),
+            (four.seed, four.max_env_steps, &four.runner, &four.ppo)
+        );
+        assert!(c.stages[..4] == four.stages[..], "stages 1-4 differ from configs/curriculum.toml's");
         let flight_modes = c.stage_train_config(5).unwrap();
         assert!(flight_modes.ppo.smoothness_coef > 0.0 && flight_modes.task.reference.glide_probability > 0.0);
+        check_budget(&c, "curriculum-flight-modes.toml");
     }
 
     #[test]
     fn the_oscillator_recipe_reads_with_stage_3_in_two_parts() {
         // configs/curriculum-oscillator.toml: the flight-modes experiment of docs/experiments.md (OSC14, OSC15).
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/curriculum-oscillator.toml");
-        let c = CurriculumConfig::load(&path).unwrap();
-        let stages: Vec<u8> = (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect();
-        assert_eq!(stages, [1, 2, 3, 3, 4]);
+        let c = shipped("curriculum-oscillator.toml");
+        assert_eq!(task_stages(&c), [1, 2, 3, 3, 4]);
         let smoothness: Vec<f32> =
             (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().ppo.smoothness_coef).collect();
         assert_eq!(smoothness, [0.3, 0.3, 0.0, 0.0, 0.03]);
