@@ -246,6 +246,13 @@ impl Default for ObservationConfig {
     }
 }
 
+impl RewardConfig {
+    /// Whether the learner's smoothness term is weighed per step (by the turns ahead, the speed, or both).
+    pub fn weighs_smoothness(&self) -> bool {
+        self.smoothness_turn_scale_degps > 0.0 || self.smoothness_min_speed_mps > 0.0
+    }
+}
+
 impl Default for RewardConfig {
     fn default() -> Self {
         Self {

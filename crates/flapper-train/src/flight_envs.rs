@@ -55,8 +55,7 @@ impl FlightEnvs {
         threads: usize,
     ) -> Result<Self, ModelError> {
         let logs_action_rate = task.reward.action_rate_weight > 0.0;
-        let weighs_smoothness =
-            task.reward.smoothness_turn_scale_degps > 0.0 || task.reward.smoothness_min_speed_mps > 0.0;
+        let weighs_smoothness = task.reward.weighs_smoothness();
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
         let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate, weighs_smoothness };
