@@ -121,6 +121,14 @@ pub struct RandomizedValidation {
     pub randomization: RandomizationConfig,
 }
 
+impl StageConfig {
+    /// The fewest iterations the stage can hand over after: one validation interval, or its gate's
+    /// `min_iterations` where that is later (a budget that leaves less stops the run before the stage).
+    pub fn least_iterations(&self) -> usize {
+        self.gate.min_iterations.max(self.validate_every)
+    }
+}
+
 impl ValidationConfig {
     /// The names of the entries the named references make: each of `references`, then
     /// `<reference>~<name>` for each randomized one (the procedural ones are drawn later).
@@ -396,8 +404,7 @@ task = { stage = 2 }
         assert!(budget <= 30_000_000, "{file}: the budget is {budget} environment steps, over the paper's 30 M");
         let mut shortest = 0;
         for k in 1..=c.stages.len() {
-            let stage = &c.stages[k - 1];
-            let needed = stage.gate.min_iterations.max(stage.validate_every);
+            let needed = c.stages[k - 1].least_iterations();
             assert!(c.stage_iterations(k, shortest).unwrap() >= needed, "{file}: stage {k} would never start");
             let t = c.stage_train_config(k).unwrap();
             shortest += (needed * t.runner.envs * t.ppo.steps_per_env) as u64;

@@ -184,7 +184,7 @@ fn run_stage(
     let stage = &config.stages[number - 1];
     let mut train_config = config.stage_train_config(number).map_err(RunError::from)?;
     let iterations = config.stage_iterations(number, spent_env_steps).map_err(RunError::from)?;
-    let needed = stage.gate.min_iterations.max(stage.validate_every);
+    let needed = stage.least_iterations();
     if let Some(budget) = config.max_env_steps
         && iterations < needed
     {
