@@ -22,6 +22,8 @@ use crate::AnalysisError;
 /// The longitudinal reference's segments: name, start and end (s).
 pub const SEGMENTS: [(&str, f64, f64); 4] =
     [("cruise", 0.0, 6.0), ("climb", 6.0, 12.0), ("glide", 12.0, 18.0), ("dive", 18.0, 24.0)];
+/// Index of the glide segment in [`SEGMENTS`].
+pub const GLIDE_SEGMENT: usize = 2;
 /// A moment counts as gliding when the flap angle moves less than this, peak to peak, over the
 /// [`GLIDE_WINDOW_S`] centred on it: the wings are held, no flapping cycle runs. (The cruise gait
 /// flaps about 100 deg peak to peak.)
@@ -69,14 +71,27 @@ pub struct ModesReport {
     pub verdict: String,
 }
 
-pub fn flight_modes(
+/// One flight along the longitudinal reference and its figures per segment.
+pub struct FlightModes {
+    pub report: ModesReport,
+    pub steps: Vec<TrackingStep>,
+    /// Per step, whether the wings are held ([`held_wings`]).
+    pub held: Vec<bool>,
+}
+
+impl FlightModes {
+    /// The share of the glide segment flown with the wings held: what "does it glide?" is decided on.
+    pub fn glide_segment_fraction(&self) -> f64 {
+        self.report.segments[GLIDE_SEGMENT].glide_fraction
+    }
+}
+
+/// Flies the longitudinal reference once from its exact start and measures each segment; writes nothing.
+pub fn measure_flight_modes(
     robot: &RobotModel,
     policy: Arc<ActorCritic>,
     task: &TaskConfig,
-    dir: &Path,
-) -> Result<(ModesReport, Vec<PathBuf>), AnalysisError> {
-    let fail =
-        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+) -> Result<FlightModes, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -104,19 +119,31 @@ pub fn flight_modes(
     let verdict = if gliding.is_empty() {
         format!(
             "no: the wings are held {:.0}% of the glide segment and {:.0}% of the dive (a segment glides from {:.0}%)",
-            100.0 * segments[2].glide_fraction,
-            100.0 * segments[3].glide_fraction,
+            100.0 * segments[GLIDE_SEGMENT].glide_fraction,
+            100.0 * segments[GLIDE_SEGMENT + 1].glide_fraction,
             100.0 * GLIDING_SEGMENT_FRACTION
         )
     } else {
         format!("yes, in: {}", gliding.join(", "))
     };
-    let report = ModesReport { segments, verdict };
+    Ok(FlightModes { report: ModesReport { segments, verdict }, steps: flight.steps, held })
+}
+
+/// [`measure_flight_modes`], then `modes.json` and `modes.svg` in `dir`.
+pub fn flight_modes(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+    dir: &Path,
+) -> Result<(ModesReport, Vec<PathBuf>), AnalysisError> {
+    let fail =
+        |path: &Path, e: &dyn std::fmt::Display| AnalysisError::Write { path: path.to_owned(), message: e.to_string() };
+    let measured = measure_flight_modes(robot, policy, task)?;
     let json = dir.join("modes.json");
-    flapper_files::write_json(&json, &report).map_err(|e| fail(&json, &e))?;
+    flapper_files::write_json(&json, &measured.report).map_err(|e| fail(&json, &e))?;
     let svg = dir.join("modes.svg");
-    draw_modes(&svg, &flight.steps, &held, &report).map_err(|e| fail(&svg, &e))?;
-    Ok((report, vec![json, svg]))
+    draw_modes(&svg, &measured.steps, &measured.held, &measured.report).map_err(|e| fail(&svg, &e))?;
+    Ok((measured.report, vec![json, svg]))
 }
 
 /// `modes.svg`: the flap angle, the power, the held wings and the energy per metre over the flight,

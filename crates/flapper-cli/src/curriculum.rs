@@ -84,12 +84,16 @@ fn report_progress(event: Progress) {
                 .iter()
                 .map(|r| format!("{} {}/{} {:.2} m", r.name, r.completed, r.episodes, r.mean_rms_m))
                 .collect();
+            let glide = match row.glide_fraction {
+                Some(share) => format!("; glide fraction {share:.2}"),
+                None => String::new(),
+            };
             let identified = match row.identification_fit_percent {
                 Some([x, y, z]) => format!("; identified fit x {x:.1}%, y {y:.1}%, z {z:.1}%"),
                 None => String::new(),
             };
             println!(
-                "  stage {stage} validation at iteration {}: {:.1}% completed, RMS {:.3} m ({}){identified}{}",
+                "  stage {stage} validation at iteration {}: {:.1}% completed, RMS {:.3} m ({}){glide}{identified}{}",
                 row.iteration,
                 row.score.completed_percent,
                 row.score.mean_rms_m,

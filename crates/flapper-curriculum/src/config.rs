@@ -181,6 +181,16 @@ pub struct Gate {
     /// a model predicts the flight is a property of the analysis, not of the flying; it must not throw
     /// away a controller that flies every bar.
     pub identification_fit_percent: Option<f64>,
+    /// `identification_fit_percent` required like every other bar: a stage none of whose checkpoints
+    /// meets it stops the run with the gate's message instead of handing over one that flies the rest.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub identification_required: bool,
+    /// The wings held for at least this share (0 to 1) of the longitudinal reference's glide segment,
+    /// as `flapper modes` measures it (flap range below 10 deg over 0.4 s; one flight from the exact
+    /// start, with every validation): the paper's "gliding instead of flapping when possible". A
+    /// checkpoint that does not fly the reference to its end does not glide (NaN in the table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glide_fraction: Option<f64>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
     #[serde(default)]
     pub min_iterations: usize,
@@ -235,6 +245,14 @@ impl CurriculumConfig {
                     g.identification_fit_percent,
                     g.max_rms_m
                 )));
+            }
+            if g.glide_fraction.is_some_and(|share| !(0.0..=1.0).contains(&share)) {
+                return Err(bad(format!("gate.glide_fraction is a share in [0, 1], got {:?}", g.glide_fraction)));
+            }
+            if g.identification_required && g.identification_fit_percent.is_none() {
+                return Err(bad(
+                    "gate.identification_required needs gate.identification_fit_percent, the bar it requires".into(),
+                ));
             }
             if let Some((name, _)) = v.reference_episodes.iter().find(|(name, _)| !v.references.contains(name)) {
                 return Err(bad(format!(
@@ -506,6 +524,10 @@ task = { stage = 2 }
         assert!(e.contains("randomized_completed_percent") && e.contains("101"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, identification_fit_percent = -5 }");
         assert!(e.contains("identification_fit_percent") && e.contains("-5"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, glide_fraction = 1.5 }");
+        assert!(e.contains("gate.glide_fraction") && e.contains("1.5"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, identification_required = true }");
+        assert!(e.contains("identification_required") && e.contains("identification_fit_percent"), "{e}");
         let second = "validation = { references = [\"longitudinal\"], procedural = 1, episodes = 1 }";
         let e = err(
             second,

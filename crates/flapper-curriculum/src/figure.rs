@@ -9,7 +9,7 @@ use flapper_ppo::IterationLog;
 use flapper_ppo::training_log::read_history;
 
 use crate::config::CurriculumConfig;
-use crate::selection::Selection;
+use crate::selection::{GateColumns, Selection};
 
 /// Draws the stages in `stage_dirs` (stage 1 first) into `path`.
 pub fn write_curriculum_figure(stage_dirs: &[PathBuf], config: &CurriculumConfig, path: &Path) -> Result<(), String> {
@@ -28,8 +28,8 @@ pub fn write_curriculum_figure(stage_dirs: &[PathBuf], config: &CurriculumConfig
         panels[4].push(curve(series(&|r| r.update.kl)));
         panels[5].push(curve(series(&|r| r.update.learning_rate)));
         let names = selection_names(dir)?;
-        let identified = config.stages[k].gate.identification_fit_percent.is_some();
-        let selection = Selection::read(&dir.join("selection.csv"), &names, identified).map_err(|e| e.to_string())?;
+        let columns = GateColumns::of(&config.stages[k].gate);
+        let selection = Selection::read(&dir.join("selection.csv"), &names, columns).map_err(|e| e.to_string())?;
         let at = |f: &dyn Fn(&crate::selection::Validated) -> f64| -> Vec<(f64, f64)> {
             selection.rows.iter().map(|r| (offset_m + r.env_steps as f64 / 1e6, f(r))).collect()
         };

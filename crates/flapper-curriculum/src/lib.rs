@@ -6,6 +6,7 @@
 
 pub mod config;
 pub mod figure;
+pub mod glide;
 pub mod identification;
 pub mod machine;
 pub mod run;

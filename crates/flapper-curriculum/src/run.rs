@@ -22,9 +22,10 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::figure::write_curriculum_figure;
+use crate::glide::glide_fraction;
 use crate::identification::identification_fit_percent;
 use crate::selection::{
-    Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_wall_time_s,
+    GateColumns, Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_wall_time_s,
 };
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
@@ -202,7 +203,7 @@ fn run_stage(
         ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?;
     let names = set.names();
     let selection_path = here.join("selection.csv");
-    let mut selection = Selection::read(&selection_path, &names, stage.gate.identification_fit_percent.is_some())?;
+    let mut selection = Selection::read(&selection_path, &names, GateColumns::of(&stage.gate))?;
 
     let saved = saved_checkpoints(&here);
     let resumed_at = saved.last().map(|(iteration, _)| *iteration);
@@ -299,8 +300,9 @@ fn judged_file(iteration: usize, averaged: usize) -> PathBuf {
     }
 }
 
-/// Flies the validation set with the checkpoint at `path` and, where the gate asks for identification
-/// and the checkpoint meets every other bar, identifies its closed loop.
+/// Flies the validation set with the checkpoint at `path`, and the longitudinal reference for its glide
+/// where the gate has a glide bar; where the gate asks for identification and the checkpoint meets
+/// every other bar, identifies its closed loop.
 fn judge(
     robot: &RobotModel,
     set: &ValidationSet,
@@ -311,22 +313,23 @@ fn judge(
 ) -> Result<Validated, ValidationError> {
     let began = Instant::now();
     let score = set.judge(robot, path)?;
-    let identification_fit_percent = match gate.identification_fit_percent {
-        Some(_) if meets_flight_bars(gate, iteration, &score) => Some(identification_fit_percent(robot, path)?),
-        _ => None,
+    let glide_fraction = match gate.glide_fraction {
+        Some(_) => Some(glide_fraction(robot, path)?),
+        None => None,
     };
-    Ok(Validated {
-        iteration,
-        env_steps,
-        validation_s: began.elapsed().as_secs_f64(),
-        score,
-        identification_fit_percent,
-    })
+    let mut row =
+        Validated { iteration, env_steps, validation_s: 0.0, score, glide_fraction, identification_fit_percent: None };
+    if gate.identification_fit_percent.is_some() && meets_flight_bars(gate, &row) {
+        row.identification_fit_percent = Some(identification_fit_percent(robot, path)?);
+    }
+    row.validation_s = began.elapsed().as_secs_f64();
+    Ok(row)
 }
 
 /// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate. The identification
-/// bar is sought, not required ([`Gate::identification_fit_percent`]): without a checkpoint that meets
-/// it, the best one that meets the other bars is handed over, marked as not identified well enough.
+/// bar is sought, not required, unless the gate says `identification_required`
+/// ([`Gate::identification_fit_percent`]): without a checkpoint that meets it, the best one that meets
+/// the other bars is handed over, marked as not identified well enough.
 fn select(
     stage: &StageConfig,
     number: usize,
@@ -342,7 +345,7 @@ fn select(
         Some(best) => Some((best, stage.gate.identification_fit_percent.map(|_| true))),
         None => selection
             .best_flying(&stage.gate)
-            .filter(|_| stage.gate.identification_fit_percent.is_some())
+            .filter(|_| stage.gate.identification_fit_percent.is_some() && !stage.gate.identification_required)
             .map(|b| (b, Some(false))),
     };
     let env_steps = last.map_or(0, |l| l.env_steps);
@@ -363,11 +366,12 @@ fn select(
         };
         return Err(CurriculumError::GateMissed {
             best: format!(
-                "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}{}",
+                "iteration {}, completed {:.1}% with a mean RMS error of {:.3} m{}{}{}",
                 best.map_or(0, |b| b.iteration),
                 best.map_or(0.0, |b| b.score.completed_percent),
                 best.map_or(f64::NAN, |b| b.score.mean_rms_m),
                 describe_rms_bars(&stage.gate, selection),
+                describe_glide(&stage.gate, selection),
                 describe_identified(selection)
             ),
             dir: here.to_owned(),
@@ -416,6 +420,24 @@ fn describe_rms_bars(gate: &Gate, selection: &Selection) -> String {
     if closest.is_empty() { String::new() } else { format!("; {}", closest.join(", ")) }
 }
 
+/// The largest glide fraction any checkpoint flew (from the gate's `min_iterations` on), for the missed
+/// gate's message.
+fn describe_glide(gate: &Gate, selection: &Selection) -> String {
+    let Some(bar) = gate.glide_fraction else { return String::new() };
+    let best = selection
+        .rows
+        .iter()
+        .filter(|r| r.iteration >= gate.min_iterations)
+        .filter_map(|r| Some((r.iteration, r.glide_fraction.filter(|share| share.is_finite())?)))
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    match best {
+        Some((iteration, share)) => {
+            format!("; glide fraction {share:.2} at best (iteration {iteration}; bar {bar})")
+        }
+        None => format!("; no checkpoint flew the longitudinal reference for its glide (bar {bar})"),
+    }
+}
+
 /// The identified checkpoints of a stage in words (x, y, z fit of each), for the missed gate's message.
 fn describe_identified(selection: &Selection) -> String {
     let identified: Vec<String> = selection
@@ -426,7 +448,7 @@ fn describe_identified(selection: &Selection) -> String {
             Some(format!("{}: x {x:.1}%, y {y:.1}%, z {z:.1}%", r.iteration))
         })
         .collect();
-    match (selection.identified, identified.is_empty()) {
+    match (selection.columns.identification, identified.is_empty()) {
         (false, _) => String::new(),
         (true, true) => "; no checkpoint met the other bars, none was identified".to_owned(),
         (true, false) => format!("; identified (iteration: fit per axis): {}", identified.join("; ")),
@@ -453,10 +475,16 @@ pub fn describe_gate(gate: &Gate) -> String {
         let bars: Vec<String> = gate.reference_max_rms_m.iter().map(|(name, bar)| format!("{name} {bar} m")).collect();
         text.push_str(&format!(", mean RMS error of {}", bars.join(", ")));
     }
-    if let Some(fit) = gate.identification_fit_percent {
+    if let Some(share) = gate.glide_fraction {
         text.push_str(&format!(
-            ", and sought (required only while the budget lasts) every axis of the identified closed loop \
-             (flapper sysid) fitting at least {fit}%"
+            ", the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
+        ));
+    }
+    if let Some(fit) = gate.identification_fit_percent {
+        let how =
+            if gate.identification_required { "required" } else { "sought (required only while the budget lasts)" };
+        text.push_str(&format!(
+            ", and {how} every axis of the identified closed loop (flapper sysid) fitting at least {fit}%"
         ));
     }
     if gate.min_iterations > 0 {

@@ -7,6 +7,7 @@ use flapper_analysis::sysid::AXES;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Gate;
+use crate::glide::meets_glide_bar;
 use crate::identification::meets_identification_bar;
 use crate::validation::{ReferenceScore, Score};
 
@@ -18,6 +19,9 @@ pub struct Validated {
     /// Seconds spent judging it: flying the validation set, and identifying it where asked.
     pub validation_s: f64,
     pub score: Score,
+    /// The share of the longitudinal reference's glide segment flown with the wings held
+    /// ([`crate::glide`]): `None` where the gate asks for no glide, NaN where the flight failed.
+    pub glide_fraction: Option<f64>,
     /// Per axis x, y, z, the fit (percent) of its identified closed loop
     /// ([`crate::identification`]): `None` where not identified (the gate asks for no identification,
     /// or the checkpoint missed the gate's other bars), NaN where it could not be identified.
@@ -34,20 +38,34 @@ pub enum SelectionError {
 #[derive(Debug, Clone, Default)]
 pub struct Selection {
     pub rows: Vec<Validated>,
-    /// Whether the table has the identification columns (its stage's gate has an identification bar).
-    pub identified: bool,
+    pub columns: GateColumns,
+}
+
+/// The columns a table has beyond the validation set's, from its stage's gate.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GateColumns {
+    /// `glide_fraction` (the gate has a glide bar).
+    pub glide: bool,
+    /// `identification_<axis>_fit_percent` (the gate has an identification bar).
+    pub identification: bool,
+}
+
+impl GateColumns {
+    pub fn of(gate: &Gate) -> Self {
+        Self { glide: gate.glide_fraction.is_some(), identification: gate.identification_fit_percent.is_some() }
+    }
 }
 
 impl Selection {
     /// The rows of `path` (none if it does not exist), for `references` in this order, with the
-    /// identification columns when `identified`.
-    pub fn read(path: &Path, references: &[String], identified: bool) -> Result<Self, SelectionError> {
+    /// gate's `columns`.
+    pub fn read(path: &Path, references: &[String], columns: GateColumns) -> Result<Self, SelectionError> {
         if !path.exists() {
-            return Ok(Self { rows: Vec::new(), identified });
+            return Ok(Self { rows: Vec::new(), columns });
         }
         let error = |message: String| SelectionError::File { path: path.to_owned(), message };
         let mut reader = csv::Reader::from_path(path).map_err(|e| error(e.to_string()))?;
-        let expected = header(references, identified);
+        let expected = header(references, columns);
         let headers: Vec<String> =
             reader.headers().map_err(|e| error(e.to_string()))?.iter().map(String::from).collect();
         if headers != expected {
@@ -76,9 +94,11 @@ impl Selection {
                     })
                 })
                 .collect::<Result<Vec<_>, SelectionError>>()?;
-            let first_fit = FIXED.len() + 3 * references.len();
+            let glide_column = FIXED.len() + 3 * references.len();
+            let glide_fraction = if columns.glide { Some(number(glide_column)?) } else { None };
+            let first_fit = glide_column + usize::from(columns.glide);
             let identification_fit_percent = match record.get(first_fit) {
-                Some(text) if identified && !text.is_empty() => {
+                Some(text) if columns.identification && !text.is_empty() => {
                     Some([number(first_fit)?, number(first_fit + 1)?, number(first_fit + 2)?])
                 }
                 _ => None,
@@ -88,10 +108,11 @@ impl Selection {
                 env_steps: number(1)? as u64,
                 validation_s: number(4)?,
                 score: Score { completed_percent: number(2)?, mean_rms_m: number(3)?, references },
+                glide_fraction,
                 identification_fit_percent,
             });
         }
-        Ok(Self { rows, identified })
+        Ok(Self { rows, columns })
     }
 
     pub fn write(&self, path: &Path, references: &[String]) -> Result<(), SelectionError> {
@@ -107,7 +128,10 @@ impl Selection {
             for r in &row.score.references {
                 values.extend([r.completed.to_string(), r.episodes.to_string(), r.mean_rms_m.to_string()]);
             }
-            if self.identified {
+            if self.columns.glide {
+                values.push(row.glide_fraction.unwrap_or(f64::NAN).to_string());
+            }
+            if self.columns.identification {
                 match row.identification_fit_percent {
                     Some(fits) => values.extend(fits.map(|fit| fit.to_string())),
                     None => values.extend([String::new(), String::new(), String::new()]),
@@ -115,7 +139,7 @@ impl Selection {
             }
             values
         });
-        flapper_files::write_csv_rows(path, &header(references, self.identified), rows)
+        flapper_files::write_csv_rows(path, &header(references, self.columns), rows)
             .map_err(|e| SelectionError::File { path: path.to_owned(), message: e.to_string() })
     }
 
@@ -145,7 +169,7 @@ impl Selection {
 
     /// The best checkpoint among those that meet every bar of the gate but the identification's.
     pub fn best_flying<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
-        best(self.rows.iter().filter(|r| meets_flight_bars(gate, r.iteration, &r.score)))
+        best(self.rows.iter().filter(|r| meets_flight_bars(gate, r)))
     }
 
     /// The best checkpoint of all, gate or not.
@@ -155,7 +179,7 @@ impl Selection {
 
     fn eligible<'a>(&'a self, gate: &'a Gate) -> impl Iterator<Item = &'a Validated> {
         self.rows.iter().filter(|r| {
-            meets_flight_bars(gate, r.iteration, &r.score)
+            meets_flight_bars(gate, r)
                 && gate
                     .identification_fit_percent
                     .is_none_or(|bar| meets_identification_bar(r.identification_fit_percent, bar))
@@ -163,10 +187,12 @@ impl Selection {
     }
 }
 
-/// Whether a checkpoint validated at `iteration` with `score` meets every bar of `gate` but the
-/// identification's (which is looked at only then).
-pub fn meets_flight_bars(gate: &Gate, iteration: usize, score: &Score) -> bool {
-    iteration >= gate.min_iterations && score.meets(gate)
+/// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked
+/// at only then): its iteration, its validation score and its glide.
+pub fn meets_flight_bars(gate: &Gate, row: &Validated) -> bool {
+    row.iteration >= gate.min_iterations
+        && row.score.meets(gate)
+        && gate.glide_fraction.is_none_or(|bar| meets_glide_bar(row.glide_fraction, bar))
 }
 
 fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
@@ -177,15 +203,19 @@ fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> 
 }
 
 /// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`,
-/// and a table with identification ends with `identification_<axis>_fit_percent` for x, y and z.
+/// then a table with a glide bar has `glide_fraction`, and one with identification ends with
+/// `identification_<axis>_fit_percent` for x, y and z.
 const FIXED: [&str; 5] = ["iteration", "env_steps", "completed_percent", "mean_rms_m", "validation_s"];
 
-fn header(references: &[String], identified: bool) -> Vec<String> {
+fn header(references: &[String], gate_columns: GateColumns) -> Vec<String> {
     let mut columns: Vec<String> = FIXED.iter().map(|c| c.to_string()).collect();
     for name in references {
         columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
     }
-    if identified {
+    if gate_columns.glide {
+        columns.push("glide_fraction".to_owned());
+    }
+    if gate_columns.identification {
         columns.extend(AXES.map(|axis| format!("identification_{axis}_fit_percent")));
     }
     columns
@@ -261,6 +291,7 @@ mod tests {
             env_steps: iteration as u64 * 100,
             validation_s: 1.5,
             score,
+            glide_fraction: None,
             identification_fit_percent: None,
         }
     }
@@ -269,7 +300,7 @@ mod tests {
     fn a_stages_wall_time_counts_each_validation_once() {
         // Validations at 10 and 20 ran inside training (its clock reads 100 s at iteration 20); the one at
         // 20 ran after that row was logged, so it alone is added.
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4)], identified: false };
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4)], columns: GateColumns::default() };
         assert_eq!(stage_wall_time_s(&selection, 100.0, 20), 101.5);
         assert_eq!(stage_wall_time_s(&selection, 100.0, 21), 100.0, "a stage that trained past its last validation");
     }
@@ -278,7 +309,7 @@ mod tests {
     fn the_best_checkpoint_is_chosen_by_completion_then_error_never_simply_the_last() {
         let selection = Selection {
             rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)],
-            identified: false,
+            columns: GateColumns::default(),
         };
         assert_eq!(selection.best().unwrap().iteration, 30);
         let gate = Gate {
@@ -288,13 +319,16 @@ mod tests {
             max_rms_m: Some(0.35),
             reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
             min_iterations: 0,
         };
         assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
         let later = Gate { min_iterations: 35, ..gate.clone() };
         assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
         let identified = Gate { identification_fit_percent: Some(80.0), max_rms_m: None, ..gate.clone() };
-        let mut with_fits = Selection { identified: true, ..selection.clone() };
+        let columns = GateColumns::of(&identified);
+        let mut with_fits = Selection { columns, ..selection.clone() };
         assert!(with_fits.best_meeting(&identified).is_none(), "flown well, not identified: not eligible");
         with_fits.rows[2].identification_fit_percent = Some([85.0, 79.0, 90.0]);
         with_fits.rows[1].identification_fit_percent = Some([85.0, 81.0, 90.0]);
@@ -302,8 +336,40 @@ mod tests {
         assert_eq!(with_fits.best().unwrap().iteration, 30, "the best of all ignores the identification");
         assert_eq!(with_fits.best_flying(&identified).unwrap().iteration, 30, "flying bars only");
         assert!(with_fits.best_flying(&later).is_none(), "before min_iterations nothing flies the gate");
-        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)], identified: false };
+        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)], columns: GateColumns::default() };
         assert_eq!(ties.best().unwrap().iteration, 10, "the earliest of equal checkpoints");
+    }
+
+    #[test]
+    fn a_glide_bar_is_a_flight_bar_that_a_checkpoint_not_gliding_or_not_measured_misses() {
+        let gate = Gate {
+            completed_percent: 100.0,
+            procedural_completed_percent: None,
+            randomized_completed_percent: None,
+            max_rms_m: None,
+            reference_max_rms_m: BTreeMap::new(),
+            identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: Some(0.5),
+            min_iterations: 0,
+        };
+        let mut selection = Selection {
+            rows: vec![row(10, 10, 0.2), row(20, 10, 0.3), row(30, 10, 0.4)],
+            columns: GateColumns::of(&gate),
+        };
+        assert!(!selection.gate_met(&gate) && selection.best_flying(&gate).is_none(), "nothing measured");
+        selection.rows[0].glide_fraction = Some(f64::NAN);
+        selection.rows[1].glide_fraction = Some(0.49);
+        selection.rows[2].glide_fraction = Some(0.62);
+        assert_eq!(
+            selection.best_meeting(&gate).unwrap().iteration,
+            30,
+            "the only one that glides, not the best flown"
+        );
+        assert_eq!(selection.best_flying(&gate).unwrap().iteration, 30);
+        assert_eq!(selection.best().unwrap().iteration, 10, "the best of all ignores the glide");
+        let lower = Gate { glide_fraction: Some(0.4), ..gate.clone() };
+        assert_eq!(selection.best_meeting(&lower).unwrap().iteration, 20);
     }
 
     #[test]
@@ -312,19 +378,32 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("selection.csv");
         let names = vec!["cruise".to_owned()];
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], identified: false };
+        let none = GateColumns::default();
+        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], columns: none };
         selection.write(&path, &names).unwrap();
-        let back = Selection::read(&path, &names, false).unwrap();
+        let back = Selection::read(&path, &names, none).unwrap();
         assert_eq!(back.rows, selection.rows);
-        let e = Selection::read(&path, &["loop".to_owned()], false).unwrap_err().to_string();
+        let e = Selection::read(&path, &["loop".to_owned()], none).unwrap_err().to_string();
         assert!(e.contains("selection.csv") && e.contains("loop_completed"), "{e}");
-        let e = Selection::read(&path, &names, true).unwrap_err().to_string();
+        let identification = GateColumns { glide: false, identification: true };
+        let e = Selection::read(&path, &names, identification).unwrap_err().to_string();
         assert!(e.contains("identification_x_fit_percent"), "a table without the identification columns: {e}");
-        let mut identified = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], identified: true };
+        let e = Selection::read(&path, &names, GateColumns { glide: true, identification: false }).unwrap_err();
+        assert!(e.to_string().contains("glide_fraction"), "a table without the glide column: {e}");
+        let mut identified = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], columns: identification };
         identified.rows[1].identification_fit_percent = Some([81.25, 79.5, 90.0]);
         identified.write(&path, &names).unwrap();
-        let back = Selection::read(&path, &names, true).unwrap();
+        let back = Selection::read(&path, &names, identification).unwrap();
         assert_eq!(back.rows, identified.rows, "fits where identified, none where not");
+        let both = GateColumns { glide: true, identification: true };
+        let mut glided = Selection { columns: both, ..identified.clone() };
+        glided.rows[0].glide_fraction = Some(0.125);
+        glided.rows[1].glide_fraction = Some(0.75);
+        glided.write(&path, &names).unwrap();
+        let back = Selection::read(&path, &names, both).unwrap();
+        assert_eq!(back.rows, glided.rows, "the glide column between the references and the fits");
+        let header = std::fs::read_to_string(&path).unwrap().lines().next().unwrap().to_owned();
+        assert!(header.ends_with("cruise_rms_m,glide_fraction,identification_x_fit_percent,identification_y_fit_percent,identification_z_fit_percent"), "{header}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -30,6 +30,8 @@ pub enum ValidationError {
     Model(#[from] ModelError),
     #[error("identification: {0}")]
     Identification(String),
+    #[error("flight modes: {0}")]
+    FlightModes(String),
 }
 
 /// How the drawn references of a validation set are named: `procedural-1`, `procedural-2`, ...
@@ -269,6 +271,8 @@ mod tests {
             max_rms_m: Some(0.5),
             reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
             min_iterations: 0,
         };
         assert!(score(&[(10, 10, 0.3), (9, 10, 0.4)]).meets(&gate));
@@ -291,6 +295,8 @@ mod tests {
             max_rms_m: Some(0.45),
             reference_max_rms_m: bars.iter().map(|&(name, bar)| (name.to_owned(), bar)).collect(),
             identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
             min_iterations: 0,
         };
         assert!(flown.mean_rms_m <= 0.45 && flown.meets(&bars(&[])), "the mean over the entries is within its bar");
@@ -312,6 +318,8 @@ mod tests {
             max_rms_m: None,
             reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&each), "without the group bar every drawn path is judged alone");
@@ -335,6 +343,8 @@ mod tests {
             max_rms_m: None,
             reference_max_rms_m: BTreeMap::new(),
             identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
             min_iterations: 0,
         };
         assert!(!flown.meets(&gate), "without their own bar randomized entries meet the nominal one");

@@ -203,6 +203,19 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
     assert!(rows[2].starts_with("4,") && rows[2].ends_with(",NaN,NaN,NaN"), "{table}");
     std::fs::remove_dir_all(&dir).unwrap();
 
+    // Required, the same bar stops the run where it was handed over above, naming the identified fits.
+    let required = gate.replacen(
+        "identification_fit_percent = 80",
+        "identification_fit_percent = 80, identification_required = true",
+        1,
+    );
+    let text = TINY.replacen("gate = { completed_percent = 0 }", &required, 1);
+    let e = run(&dir, &text, Some(1)).unwrap_err();
+    assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("and required every axis"), "{e}");
+    assert!(e.contains("identified (iteration: fit per axis): 4: x NaN%"), "{e}");
+    assert!(!stage_dir(&dir, 1).join("selected.json").exists(), "nothing handed over");
+    std::fs::remove_dir_all(&dir).unwrap();
+
     // Where no checkpoint meets the other bars, nothing is identified and the gate is missed.
     let gate = "gate = { completed_percent = 100, identification_fit_percent = 80 }";
     let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
@@ -211,6 +224,29 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
     assert!(e.contains("no checkpoint met the other bars, none was identified"), "{e}");
     assert_eq!(run(&dir, &text, None).unwrap_err(), e, "read back, the table gives the same verdict");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_glide_bar_measures_every_checkpoint_and_stops_a_stage_that_never_glides() {
+    let dir = scratch("glide");
+    let gate = "gate = { completed_percent = 0, glide_fraction = 0.5 }";
+    let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
+    // Four iterations cannot fly the longitudinal reference: no checkpoint glides, the stage stops.
+    let e = run(&dir, &text, None).unwrap_err();
+    assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("glide segment (flapper modes)"), "{e}");
+    assert!(e.contains("no checkpoint flew the longitudinal reference for its glide (bar 0.5)"), "{e}");
+    let table = std::fs::read_to_string(stage_dir(&dir, 1).join("selection.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().collect();
+    assert!(rows[0].ends_with(",cruise_rms_m,glide_fraction"), "{table}");
+    assert_eq!(rows.len(), 3, "a row per validated checkpoint: {table}");
+    assert!(rows[1..].iter().all(|row| row.ends_with(",NaN")), "not flown to its end: NaN: {table}");
+    assert_eq!(run(&dir, &text, None).unwrap_err(), e, "read back, the table gives the same verdict");
+    std::fs::remove_dir_all(&dir).unwrap();
+    // A bar of 0 is met by any flight that ends, not by one that fails: it still stops.
+    let text =
+        TINY.replacen("gate = { completed_percent = 0 }", "gate = { completed_percent = 0, glide_fraction = 0 }", 1);
+    assert!(run(&dir, &text, None).unwrap_err().contains("missed its gate"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
