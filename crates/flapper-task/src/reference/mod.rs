@@ -100,6 +100,11 @@ impl Reference {
         (b - a).length() / self.dt_s
     }
 
+    /// Vertical speed along the path at `step` (m/s, positive climbing).
+    pub fn vertical_speed(&self, step: usize) -> f64 {
+        (self.target(step + 1).z - self.target(step).z) / self.dt_s
+    }
+
     /// The fastest turn of the direction of travel (deg/s) between consecutive steps over the `steps`
     /// steps from `step` on (0 for a straight path, whatever its slope or speed).
     pub fn fastest_turn_degps(&self, step: usize, steps: usize) -> f64 {
