@@ -196,6 +196,24 @@ pub struct Gate {
     pub min_iterations: usize,
 }
 
+#[cfg(test)]
+impl Gate {
+    /// A gate with only its completion bar, for tests to add bars to.
+    pub(crate) fn completing(completed_percent: f64) -> Self {
+        Self {
+            completed_percent,
+            procedural_completed_percent: None,
+            randomized_completed_percent: None,
+            max_rms_m: None,
+            reference_max_rms_m: BTreeMap::new(),
+            identification_fit_percent: None,
+            identification_required: false,
+            glide_fraction: None,
+            min_iterations: 0,
+        }
+    }
+}
+
 impl CurriculumConfig {
     pub fn load(path: &Path) -> Result<Self, CurriculumConfigError> {
         let text = std::fs::read_to_string(path)

@@ -279,8 +279,6 @@ pub fn stage_wall_time_s(selection: &Selection, trained_wall_time_s: f64, last_i
 
 #[cfg(test)]
 mod tests {
-    use std::collections::BTreeMap;
-
     use super::*;
 
     fn row(iteration: usize, completed: usize, rms: f64) -> Validated {
@@ -312,17 +310,7 @@ mod tests {
             columns: GateColumns::default(),
         };
         assert_eq!(selection.best().unwrap().iteration, 30);
-        let gate = Gate {
-            completed_percent: 100.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
-            max_rms_m: Some(0.35),
-            reference_max_rms_m: BTreeMap::new(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: None,
-            min_iterations: 0,
-        };
+        let gate = Gate { max_rms_m: Some(0.35), ..Gate::completing(100.0) };
         assert_eq!(selection.best_meeting(&gate).unwrap().iteration, 30);
         let later = Gate { min_iterations: 35, ..gate.clone() };
         assert!(selection.best_meeting(&later).is_none() && !selection.gate_met(&later));
@@ -342,17 +330,7 @@ mod tests {
 
     #[test]
     fn a_glide_bar_is_a_flight_bar_that_a_checkpoint_not_gliding_or_not_measured_misses() {
-        let gate = Gate {
-            completed_percent: 100.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
-            max_rms_m: None,
-            reference_max_rms_m: BTreeMap::new(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: Some(0.5),
-            min_iterations: 0,
-        };
+        let gate = Gate { glide_fraction: Some(0.5), ..Gate::completing(100.0) };
         let mut selection = Selection {
             rows: vec![row(10, 10, 0.2), row(20, 10, 0.3), row(30, 10, 0.4)],
             columns: GateColumns::of(&gate),

@@ -227,8 +227,6 @@ impl Score {
 
 #[cfg(test)]
 mod tests {
-    use std::collections::BTreeMap;
-
     use super::*;
 
     fn score(per_reference: &[(usize, usize, f64)]) -> Score {
@@ -264,17 +262,7 @@ mod tests {
 
     #[test]
     fn the_gate_asks_every_reference_and_the_mean_error() {
-        let gate = Gate {
-            completed_percent: 90.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
-            max_rms_m: Some(0.5),
-            reference_max_rms_m: BTreeMap::new(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: None,
-            min_iterations: 0,
-        };
+        let gate = Gate { max_rms_m: Some(0.5), ..Gate::completing(90.0) };
         assert!(score(&[(10, 10, 0.3), (9, 10, 0.4)]).meets(&gate));
         assert!(!score(&[(10, 10, 0.3), (8, 10, 0.4)]).meets(&gate), "one reference below the bar");
         assert!(!score(&[(10, 10, 0.6), (10, 10, 0.6)]).meets(&gate), "the error above its bar");
@@ -289,15 +277,9 @@ mod tests {
                 .to_vec(),
         );
         let bars = |bars: &[(&str, f64)]| Gate {
-            completed_percent: 90.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
             max_rms_m: Some(0.45),
             reference_max_rms_m: bars.iter().map(|&(name, bar)| (name.to_owned(), bar)).collect(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: None,
-            min_iterations: 0,
+            ..Gate::completing(90.0)
         };
         assert!(flown.mean_rms_m <= 0.45 && flown.meets(&bars(&[])), "the mean over the entries is within its bar");
         assert!(!flown.meets(&bars(&[("longitudinal", 0.3)])), "0.39 m on longitudinal misses its 0.3 m bar");
@@ -311,17 +293,7 @@ mod tests {
         let names = ["cruise", PROCEDURAL_PREFIX, PROCEDURAL_PREFIX];
         // The named reference flown, one drawn path flown, the other drawn path mostly not: 13/20 drawn.
         let flown = named_score(&names, &[(10, 10, 0.3), (10, 10, 0.3), (3, 10, 0.3)]);
-        let each = Gate {
-            completed_percent: 90.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
-            max_rms_m: None,
-            reference_max_rms_m: BTreeMap::new(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: None,
-            min_iterations: 0,
-        };
+        let each = Gate::completing(90.0);
         assert!(!flown.meets(&each), "without the group bar every drawn path is judged alone");
         let group = Gate { procedural_completed_percent: Some(65.0), ..each.clone() };
         assert!(flown.meets(&group), "13 of 20 drawn episodes meet a 65% group bar");
@@ -336,17 +308,7 @@ mod tests {
         let names = ["lateral", "lateral~table3", "longitudinal~table3"];
         let flown = named_score(&names, &[(10, 10, 0.2), (9, 10, 0.4), (8, 10, 0.5)]);
         assert!(flown.references[1].is_randomized() && !flown.references[0].is_randomized());
-        let gate = Gate {
-            completed_percent: 95.0,
-            procedural_completed_percent: None,
-            randomized_completed_percent: None,
-            max_rms_m: None,
-            reference_max_rms_m: BTreeMap::new(),
-            identification_fit_percent: None,
-            identification_required: false,
-            glide_fraction: None,
-            min_iterations: 0,
-        };
+        let gate = Gate::completing(95.0);
         assert!(!flown.meets(&gate), "without their own bar randomized entries meet the nominal one");
         assert!(flown.meets(&Gate { randomized_completed_percent: Some(80.0), ..gate.clone() }));
         assert!(!flown.meets(&Gate { randomized_completed_percent: Some(85.0), ..gate.clone() }), "8/10 is below 85%");
