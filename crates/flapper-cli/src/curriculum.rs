@@ -102,7 +102,7 @@ fn report_progress(event: Progress) {
             );
         }
         Progress::StageDone { outcome } => println!(
-            "stage {} ({}) done: {} iterations, {:.2} M steps, {:.0} s; hands over iteration {} ({:.1}% completed, RMS {:.3} m){}",
+            "stage {} ({}) done: {} iterations, {:.2} M steps, {:.0} s; hands over iteration {} ({:.1}% completed, RMS {:.3} m{}){}",
             outcome.stage,
             outcome.name,
             outcome.iterations,
@@ -111,6 +111,7 @@ fn report_progress(event: Progress) {
             outcome.selected_iteration,
             outcome.validation_score,
             outcome.validation_rms_m,
+            outcome.glide_fraction.map_or(String::new(), |share| format!(", glide fraction {share:.2}")),
             match outcome.identification_met {
                 Some(false) =>
                     "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",

@@ -390,6 +390,7 @@ fn select(
         validation_rms_m: best.score.mean_rms_m,
         checkpoint,
         identification_met,
+        glide_fraction: best.glide_fraction,
         cpu: crate::machine::cpu_model(),
     };
     let selected = here.join("selected.json");

@@ -241,6 +241,9 @@ pub struct StageOutcome {
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification_met: Option<bool>,
+    /// The selected checkpoint's glide fraction ([`crate::glide`]); absent where the gate has no glide bar.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glide_fraction: Option<f64>,
     /// The CPU that finished the stage ([`crate::machine::cpu_model`]): training reproduces row for row
     /// on this CPU model, not on every one. Absent in runs recorded before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -187,6 +187,7 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
         serde_json::from_str(&std::fs::read_to_string(stage_dir(&dir, 1).join("selected.json")).unwrap()).unwrap();
     assert_eq!(selected["selected_iteration"], 4, "{selected}");
     assert_eq!(selected["identification_met"], false, "{selected}");
+    assert!(selected.get("glide_fraction").is_none(), "no glide bar, no glide recorded: {selected}");
     if cfg!(target_arch = "x86_64") {
         let cpu = selected["cpu"].as_str().unwrap_or_default();
         assert!(
