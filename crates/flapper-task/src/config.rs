@@ -183,6 +183,15 @@ pub struct ReferenceConfig {
     pub glide_speed_mps: Interval,
     /// The glide commands' ratios of forward to sink speed, used where `glide_probability` > 0.
     pub glide_ratio: Interval,
+    /// Chance that a held command (not a loop, a sharp turn or a glide) is a long straight and level one
+    /// at a speed from `level_speed_mps`, held `level_duration_s`: slow level flight long enough that a
+    /// slowly growing sideways weave costs what it costs on a long straight path (the shipped controller
+    /// weaves +-1 m within 20 s at 3 m/s). 0 (the default) draws nothing extra.
+    pub level_probability: f64,
+    /// The level commands' forward speeds (m/s), used where `level_probability` > 0.
+    pub level_speed_mps: Interval,
+    /// How long a level command is held (s), used where `level_probability` > 0.
+    pub level_duration_s: f64,
 }
 
 /// Paper III-E: the episode starts near the reference's start so the policy must recover and rejoin.
@@ -309,6 +318,9 @@ impl Default for ReferenceConfig {
             glide_probability: 0.0,
             glide_speed_mps: [3.5, 4.2],
             glide_ratio: [4.0, 4.6],
+            level_probability: 0.0,
+            level_speed_mps: [2.5, 3.5],
+            level_duration_s: 8.0,
         }
     }
 }
@@ -452,6 +464,8 @@ impl TaskConfig {
             ("reference.sharp_turn_probability", f.sharp_turn_probability, 0.0, 1.0),
             ("reference.slow_probability", f.slow_probability, 0.0, 1.0),
             ("reference.glide_probability", f.glide_probability, 0.0, 1.0),
+            ("reference.level_probability", f.level_probability, 0.0, 1.0),
+            ("reference.level_duration_s", f.level_duration_s, 0.1, 600.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
             ("control.differential_flap", self.control.differential_flap, 0.0, 1.0),
@@ -501,6 +515,7 @@ impl TaskConfig {
             ("reference.slow_speed_mps", f.slow_speed_mps, 0.1, fastest),
             ("reference.glide_speed_mps", f.glide_speed_mps, 0.1, fastest),
             ("reference.glide_ratio", f.glide_ratio, 0.5, 100.0),
+            ("reference.level_speed_mps", f.level_speed_mps, 0.1, fastest),
             ("control.flap_frequency_hz", self.control.flap_frequency_hz, 0.1, 20.0),
         ] {
             check_interval(key, interval)?;

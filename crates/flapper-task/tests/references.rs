@@ -151,6 +151,42 @@ fn glide_commands_descend_straight_at_their_slope_and_change_nothing_where_not_a
 }
 
 #[test]
+fn level_commands_fly_straight_and_level_for_their_duration_and_change_nothing_where_not_asked_for() {
+    let stage3 = TaskConfig::stage(3).unwrap().reference;
+    let make = |config: &ReferenceConfig| procedural(config, 60.0, 0.62, DT, &mut ChaCha8Rng::seed_from_u64(7));
+    assert_eq!(
+        make(&stage3),
+        make(&ReferenceConfig { level_speed_mps: [1.0, 1.5], level_duration_s: 20.0, ..stage3.clone() }),
+        "probability 0 draws nothing extra"
+    );
+    let always = ReferenceConfig {
+        level_probability: 1.0,
+        level_speed_mps: [2.6, 2.9],
+        level_duration_s: 9.0,
+        loop_probability: 0.0,
+        sharp_turn_probability: 0.0,
+        ..stage3.clone()
+    };
+    let r = make(&always);
+    // After the first command every step flies straight and level at a level speed, for 9 s each.
+    let first = (always.command_duration_s / DT) as usize + 1;
+    let heading = |k: usize| {
+        let step = r.target(k + 1) - r.target(k);
+        step.y.atan2(step.x)
+    };
+    for k in (first..r.len() - 1).step_by(10) {
+        let step = r.target(k + 1) - r.target(k);
+        assert!(step.z.abs() < 1e-9, "step {k}: level");
+        let speed = (step.x * step.x + step.y * step.y).sqrt() / DT;
+        assert!((2.6 - 1e-6..=2.9 + 1e-6).contains(&speed), "step {k}: {speed} m/s");
+    }
+    let within_first_level_command = first + 10..first + (9.0 / DT) as usize - 10;
+    let straight = within_first_level_command.clone().all(|k| (heading(k) - heading(first + 10)).abs() < 1e-9);
+    assert!(straight, "one level command holds its heading for its 9 s");
+    assert!(r.duration_s() >= 60.0 && r.duration_s() < 60.0 + 0.62 + 9.0 + DT, "{} s", r.duration_s());
+}
+
+#[test]
 fn csv_reference_loads_and_resamples() {
     let text = "time_s,x_m,y_m,z_m\n0,0,0,10\n0.5,2,0,10\n1.0,4,0,10.5\n";
     let r = parse_reference_csv(text, "mine.csv", DT, 30).unwrap();

@@ -90,7 +90,8 @@ pub fn build(name: &str, pieces: &[Piece], start: Vec3, yaw_rad: f64, dt_s: f64)
 /// A seeded random reference of at least `duration_s` (plus `extra_s` to cover the lookahead) from
 /// a stage's ranges: one piece per slot, a loop with `loop_probability`, else a sharp turn with
 /// `sharp_turn_probability`, else a straight descent at a glide slope with `glide_probability`, else a
-/// command held `command_duration_s` (at a slow speed with `slow_probability`).
+/// long straight level command with `level_probability`, else a command held `command_duration_s` (at a
+/// slow speed with `slow_probability`).
 pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s: f64, rng: &mut impl Rng) -> Reference {
     let mut pieces = Vec::new();
     let mut total = 0.0;
@@ -127,6 +128,13 @@ pub fn procedural(config: &ReferenceConfig, duration_s: f64, extra_s: f64, dt_s:
                 vertical_speed_mps: -forward_speed_mps / uniform(rng, config.glide_ratio),
                 yaw_rate_radps: 0.0,
                 duration_s: config.command_duration_s,
+            }
+        } else if !first && chance(rng, config.level_probability) {
+            Piece::Command {
+                forward_speed_mps: uniform(rng, config.level_speed_mps),
+                vertical_speed_mps: 0.0,
+                yaw_rate_radps: 0.0,
+                duration_s: config.level_duration_s,
             }
         } else {
             let slow = chance(rng, config.slow_probability);
