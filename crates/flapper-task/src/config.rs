@@ -120,19 +120,25 @@ pub struct RewardConfig {
     /// linearly to 0 at [`SMOOTHNESS_SPEED_RAMP_MPS`] below it, so that slow flight, which needs a fast
     /// stroke and quick corrections, is not asked for a steady one; 0 weighs every speed 1.
     pub smoothness_min_speed_mps: f64,
-    /// Weighs the smoothness term more where the reference path descends: times 1 + this gain at a
-    /// sink rate of [`SMOOTHNESS_DESCENT_SINK_MPS`] or more, rising linearly from 1 on a level path, so
-    /// that a descent, which the robot can fly with its wings held, asks for a held stroke (a glide)
-    /// more than level flight and climbs do; 0 weighs every slope 1.
-    pub smoothness_descent_gain: f64,
+    /// Weighs the smoothness term more where the reference path sinks at a slope the robot can glide
+    /// (horizontal over sink speed at least [`SMOOTHNESS_GLIDE_MIN_RATIO`]): times 1 + this gain from a
+    /// sink rate of [`SMOOTHNESS_GLIDE_SINK_MPS`] on, rising linearly from 1 on a level path, so that a
+    /// glide slope, which the robot can fly with its wings held, asks for a held stroke; level flight,
+    /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
+    pub smoothness_glide_gain: f64,
 }
 
 /// Over how much speed below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0 (m/s).
 pub const SMOOTHNESS_SPEED_RAMP_MPS: f64 = 0.5;
 
-/// The sink rate from which `reward.smoothness_descent_gain` weighs in full (m/s): the gentlest glide
+/// The sink rate from which `reward.smoothness_glide_gain` weighs in full (m/s): the gentlest glide
 /// commands sink 3.5 / 4.6 = 0.76 m/s (`reference.glide_speed_mps`, `reference.glide_ratio`).
-pub const SMOOTHNESS_DESCENT_SINK_MPS: f64 = 0.5;
+pub const SMOOTHNESS_GLIDE_SINK_MPS: f64 = 0.5;
+
+/// The steepest slope `reward.smoothness_glide_gain` counts as a glide: horizontal over sink speed at
+/// least this. The shipped model glides 4.6 : 1 (`flapper fly --controller glide`); longitudinal's dive
+/// (3.8 m/s forward, 1.5 m/s down) is 2.5 : 1.
+pub const SMOOTHNESS_GLIDE_MIN_RATIO: f64 = 3.5;
 
 /// Paper III-F: 30 s episodes, 3 m error termination, attitude termination in stages 1-2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -270,7 +276,7 @@ impl RewardConfig {
     pub fn weighs_smoothness(&self) -> bool {
         self.smoothness_turn_scale_degps > 0.0
             || self.smoothness_min_speed_mps > 0.0
-            || self.smoothness_descent_gain > 0.0
+            || self.smoothness_glide_gain > 0.0
     }
 }
 
@@ -289,7 +295,7 @@ impl Default for RewardConfig {
             action_rate_scale: 1.0,
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
-            smoothness_descent_gain: 0.0,
+            smoothness_glide_gain: 0.0,
         }
     }
 }
@@ -484,7 +490,7 @@ impl TaskConfig {
             ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
-            ("reward.smoothness_descent_gain", r.smoothness_descent_gain, 0.0, 1e3),
+            ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -663,9 +669,8 @@ mod tests {
         let err =
             TaskConfig::from_toml("[reward]\nsmoothness_min_speed_mps = -3\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reward.smoothness_min_speed_mps") && err.contains("-3"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reward]\nsmoothness_descent_gain = -1\n", "bad.toml").unwrap_err().to_string();
-        assert!(err.contains("reward.smoothness_descent_gain") && err.contains("-1"), "{err}");
+        let err = TaskConfig::from_toml("[reward]\nsmoothness_glide_gain = -1\n", "bad.toml").unwrap_err().to_string();
+        assert!(err.contains("reward.smoothness_glide_gain") && err.contains("-1"), "{err}");
         let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();

@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
-use crate::config::{SMOOTHNESS_DESCENT_SINK_MPS, SMOOTHNESS_SPEED_RAMP_MPS, TaskConfig};
+use crate::config::{SMOOTHNESS_GLIDE_MIN_RATIO, SMOOTHNESS_GLIDE_SINK_MPS, SMOOTHNESS_SPEED_RAMP_MPS, TaskConfig};
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
@@ -317,8 +317,9 @@ impl FlightEnv {
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
     /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
     /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0), times
-    /// 1 + `reward.smoothness_descent_gain` x the reference's sink rate over
-    /// [`SMOOTHNESS_DESCENT_SINK_MPS`] (at most 1; 1 on level paths and climbs).
+    /// 1 + `reward.smoothness_glide_gain` x the reference's sink rate over [`SMOOTHNESS_GLIDE_SINK_MPS`]
+    /// (at most 1) where it sinks at a glide slope (no steeper than [`SMOOTHNESS_GLIDE_MIN_RATIO`]; 1
+    /// on level paths, climbs and dives).
     pub fn smoothness_weight(&self) -> f32 {
         let reward = &self.config.reward;
         let mut weight = 1.0;
@@ -330,9 +331,12 @@ impl FlightEnv {
             let below = reward.smoothness_min_speed_mps - self.reference.speed(self.step);
             weight *= (1.0 - below / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0);
         }
-        if reward.smoothness_descent_gain > 0.0 {
-            let sink = -self.reference.vertical_speed(self.step);
-            weight *= 1.0 + reward.smoothness_descent_gain * (sink / SMOOTHNESS_DESCENT_SINK_MPS).clamp(0.0, 1.0);
+        if reward.smoothness_glide_gain > 0.0 {
+            let (sink, horizontal) =
+                (-self.reference.vertical_speed(self.step), self.reference.horizontal_speed(self.step));
+            if sink > 0.0 && horizontal >= SMOOTHNESS_GLIDE_MIN_RATIO * sink {
+                weight *= 1.0 + reward.smoothness_glide_gain * (sink / SMOOTHNESS_GLIDE_SINK_MPS).min(1.0);
+            }
         }
         weight as f32
     }

@@ -470,7 +470,7 @@ fn the_smoothness_weight_falls_below_its_speed_and_multiplies_the_turns_weight()
 }
 
 #[test]
-fn the_smoothness_weight_rises_on_descents_up_to_its_gain_and_never_on_climbs() {
+fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climbs_or_dives() {
     // Straight paths at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
     let sloped = |vertical: f64| {
         let points =
@@ -479,7 +479,7 @@ fn the_smoothness_weight_rises_on_descents_up_to_its_gain_and_never_on_climbs() 
     };
     let first_weight = |reference: Arc<Reference>, gain: f64, min_speed: f64| {
         let mut config = exact_start(TaskConfig::default());
-        config.reward.smoothness_descent_gain = gain;
+        config.reward.smoothness_glide_gain = gain;
         config.reward.smoothness_min_speed_mps = min_speed;
         assert_eq!(config.reward.weighs_smoothness(), gain > 0.0 || min_speed > 0.0);
         let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
@@ -487,7 +487,8 @@ fn the_smoothness_weight_rises_on_descents_up_to_its_gain_and_never_on_climbs() 
     };
     assert_eq!(first_weight(sloped(-0.83), 0.0, 0.0), 1.0, "off: every slope weighs 1");
     assert!((first_weight(sloped(-0.83), 4.0, 0.0) - 5.0).abs() < 1e-4, "a glide slope: 1 + the gain");
-    assert!((first_weight(sloped(-1.5), 4.0, 0.0) - 5.0).abs() < 1e-4, "steeper: no more than 1 + the gain");
+    assert!((first_weight(sloped(-1.05), 4.0, 0.0) - 5.0).abs() < 1e-4, "3.6 : 1, steeper: no more than 1 + the gain");
+    assert!((first_weight(sloped(-1.5), 4.0, 0.0) - 1.0).abs() < 1e-6, "longitudinal's dive, 2.5 : 1, is no glide");
     assert!((first_weight(sloped(-0.25), 4.0, 0.0) - 3.0).abs() < 1e-4, "half the full sink: half the gain");
     assert!((first_weight(sloped(0.0), 4.0, 0.0) - 1.0).abs() < 1e-6, "level");
     assert!((first_weight(sloped(0.8), 4.0, 0.0) - 1.0).abs() < 1e-6, "a climb");

@@ -105,6 +105,12 @@ impl Reference {
         (self.target(step + 1).z - self.target(step).z) / self.dt_s
     }
 
+    /// Horizontal speed along the path at `step` (m/s).
+    pub fn horizontal_speed(&self, step: usize) -> f64 {
+        let d = self.target(step + 1) - self.target(step);
+        d.x.hypot(d.y) / self.dt_s
+    }
+
     /// The fastest turn of the direction of travel (deg/s) between consecutive steps over the `steps`
     /// steps from `step` on (0 for a straight path, whatever its slope or speed).
     pub fn fastest_turn_degps(&self, step: usize, steps: usize) -> f64 {
