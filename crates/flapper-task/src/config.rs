@@ -272,7 +272,7 @@ impl Default for ObservationConfig {
 
 impl RewardConfig {
     /// Whether the learner's smoothness term is weighed per step (by the turns ahead, the speed, the
-    /// descent, or several of them).
+    /// glide slope, or several of them).
     pub fn weighs_smoothness(&self) -> bool {
         self.smoothness_turn_scale_degps > 0.0
             || self.smoothness_min_speed_mps > 0.0
@@ -671,6 +671,11 @@ mod tests {
         assert!(err.contains("reward.smoothness_min_speed_mps") && err.contains("-3"), "{err}");
         let err = TaskConfig::from_toml("[reward]\nsmoothness_glide_gain = -1\n", "bad.toml").unwrap_err().to_string();
         assert!(err.contains("reward.smoothness_glide_gain") && err.contains("-1"), "{err}");
+        let err = TaskConfig::from_toml("[reference]\nlevel_probability = 1.5\n", "b.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.level_probability") && err.contains("1.5"), "{err}");
+        let err =
+            TaskConfig::from_toml("[reference]\nlevel_speed_mps = [3.5, 2.5]\n", "b.toml").unwrap_err().to_string();
+        assert!(err.contains("reference.level_speed_mps"), "{err}");
         let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
         assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
         let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
