@@ -635,53 +635,46 @@ mod tests {
 
     #[test]
     fn unknown_keys_and_bad_values_are_named() {
-        let err = TaskConfig::from_toml("[reward]\nposition_wieght = 0.3\n", "bad.toml").unwrap_err().to_string();
+        let refused = |text: &str| TaskConfig::from_toml(text, "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\nposition_wieght = 0.3\n");
         assert!(err.contains("bad.toml") && err.contains("position_wieght"), "{err}");
-        let err =
-            TaskConfig::from_toml("[episode]\nmax_position_error_m = -1.0\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[episode]\nmax_position_error_m = -1.0\n");
         assert!(err.contains("episode.max_position_error_m") && err.contains("-1"), "{err}");
-        let err = TaskConfig::from_toml("[reference]\nglide_ratio = [4.0, 0.2]\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nglide_ratio = [4.0, 0.2]\n");
         assert!(err.contains("reference.glide_ratio"), "{err}");
-        let err = TaskConfig::from_toml("[reference]\nglide_probability = -0.1\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nglide_probability = -0.1\n");
         assert!(err.contains("reference.glide_probability") && err.contains("-0.1"), "{err}");
-        let err = TaskConfig::from_toml("[reference]\nslow_probability = 1.5\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nslow_probability = 1.5\n");
         assert!(err.contains("reference.slow_probability") && err.contains("1.5"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reference]\nslow_speed_mps = [3.0, 2.0]\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nslow_speed_mps = [3.0, 2.0]\n");
         assert!(err.contains("reference.slow_speed_mps"), "{err}");
-        let err = TaskConfig::from_toml("[control]\naction_mode = \"flapping\"\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[control]\naction_mode = \"flapping\"\n");
         assert!(err.contains("bad.toml") && err.contains("flapping") && err.contains("flap_oscillator"), "{err}");
-        let err =
-            TaskConfig::from_toml("[control]\nflap_frequency_hz = [8.0, 3.0]\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[control]\nflap_frequency_hz = [8.0, 3.0]\n");
         assert!(err.contains("control.flap_frequency_hz"), "{err}");
-        let err =
-            TaskConfig::from_toml("[control]\nflap_frequency_hz = [0.0, 3.0]\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[control]\nflap_frequency_hz = [0.0, 3.0]\n");
         assert!(err.contains("control.flap_frequency_hz"), "{err}");
-        let err = TaskConfig::from_toml("[control]\ndifferential_flap = 1.5\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[control]\ndifferential_flap = 1.5\n");
         assert!(err.contains("control.differential_flap") && err.contains("1.5"), "{err}");
-        let err = TaskConfig::from_toml("[reward]\naction_rate_scale = 0.0\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\naction_rate_scale = 0.0\n");
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
-        let err = TaskConfig::from_toml("[reward]\naction_rate_weight = -1\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reward]\nsmoothness_turn_scale_degps = -30\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\nsmoothness_turn_scale_degps = -30\n");
         assert!(err.contains("reward.smoothness_turn_scale_degps") && err.contains("-30"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reward]\nsmoothness_min_speed_mps = -3\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\nsmoothness_min_speed_mps = -3\n");
         assert!(err.contains("reward.smoothness_min_speed_mps") && err.contains("-3"), "{err}");
-        let err = TaskConfig::from_toml("[reward]\nsmoothness_glide_gain = -1\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("[reward]\nsmoothness_glide_gain = -1\n");
         assert!(err.contains("reward.smoothness_glide_gain") && err.contains("-1"), "{err}");
-        let err = TaskConfig::from_toml("[reference]\nlevel_probability = 1.5\n", "b.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nlevel_probability = 1.5\n");
         assert!(err.contains("reference.level_probability") && err.contains("1.5"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reference]\nlevel_speed_mps = [3.5, 2.5]\n", "b.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nlevel_speed_mps = [3.5, 2.5]\n");
         assert!(err.contains("reference.level_speed_mps"), "{err}");
-        let err = TaskConfig::from_toml("[control]\nflap_shape_rate_limit = -2\n", "b.toml").unwrap_err().to_string();
+        let err = refused("[control]\nflap_shape_rate_limit = -2\n");
         assert!(err.contains("control.flap_shape_rate_limit") && err.contains("-2"), "{err}");
-        let err = TaskConfig::from_toml("stage = 9\n", "bad.toml").unwrap_err().to_string();
+        let err = refused("stage = 9\n");
         assert!(err.contains("stage 9"), "{err}");
-        let err =
-            TaskConfig::from_toml("[reference]\nforward_speed_mps = [5.0, 3.0]\n", "b.toml").unwrap_err().to_string();
+        let err = refused("[reference]\nforward_speed_mps = [5.0, 3.0]\n");
         assert!(err.contains("forward_speed_mps"), "{err}");
         assert!(TaskConfig::from_toml("[control\n", "broken.toml").unwrap_err().to_string().contains("broken.toml"));
     }

@@ -332,8 +332,8 @@ impl FlightEnv {
             weight *= (1.0 - below / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0);
         }
         if reward.smoothness_glide_gain > 0.0 {
-            let (sink, horizontal) =
-                (-self.reference.vertical_speed(self.step), self.reference.horizontal_speed(self.step));
+            let velocity = self.reference.velocity(self.step);
+            let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
             if sink > 0.0 && horizontal >= SMOOTHNESS_GLIDE_MIN_RATIO * sink {
                 weight *= 1.0 + reward.smoothness_glide_gain * (sink / SMOOTHNESS_GLIDE_SINK_MPS).min(1.0);
             }

@@ -100,15 +100,9 @@ impl Reference {
         (b - a).length() / self.dt_s
     }
 
-    /// Vertical speed along the path at `step` (m/s, positive climbing).
-    pub fn vertical_speed(&self, step: usize) -> f64 {
-        (self.target(step + 1).z - self.target(step).z) / self.dt_s
-    }
-
-    /// Horizontal speed along the path at `step` (m/s).
-    pub fn horizontal_speed(&self, step: usize) -> f64 {
-        let d = self.target(step + 1) - self.target(step);
-        d.x.hypot(d.y) / self.dt_s
+    /// Velocity along the path at `step` (m/s; z up): its length is [`Reference::speed`].
+    pub fn velocity(&self, step: usize) -> Vec3 {
+        (self.target(step + 1) - self.target(step)) / self.dt_s
     }
 
     /// The fastest turn of the direction of travel (deg/s) between consecutive steps over the `steps`
