@@ -126,10 +126,24 @@ pub struct RewardConfig {
     /// glide slope, which the robot can fly with its wings held, asks for a held stroke; level flight,
     /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
     pub smoothness_glide_gain: f64,
+    /// Prices the energy by the reference's speed: in full at or above this speed (m/s), less and less
+    /// over the [`SMOOTHNESS_SPEED_RAMP_MPS`] below it and not at all further down, where r_energy reads
+    /// its top (1) whatever the power. Slow flight needs power (the robot's power curve rises below
+    /// its cruise speed), and a price on it teaches the policy to fly faster than asked; 0 prices the
+    /// energy at every speed.
+    pub energy_min_speed_mps: f64,
 }
 
-/// Over how much speed below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0 (m/s).
+/// Over how much speed below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0, and
+/// below `reward.energy_min_speed_mps` the energy's price (m/s).
 pub const SMOOTHNESS_SPEED_RAMP_MPS: f64 = 0.5;
+
+/// The share of a per-step weight kept at `speed` (m/s) by a floor of `min_speed`: 1 at or above it,
+/// falling linearly to 0 over the [`SMOOTHNESS_SPEED_RAMP_MPS`] below it; 1 at every speed where
+/// `min_speed` is 0 (off).
+pub fn speed_ramp(min_speed: f64, speed: f64) -> f64 {
+    if min_speed > 0.0 { (1.0 - (min_speed - speed) / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0) } else { 1.0 }
+}
 
 /// The sink rate from which `reward.smoothness_glide_gain` weighs in full (m/s): the gentlest glide
 /// commands sink 3.5 / 4.6 = 0.76 m/s (`reference.glide_speed_mps`, `reference.glide_ratio`).
@@ -296,6 +310,7 @@ impl Default for RewardConfig {
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
+            energy_min_speed_mps: 0.0,
         }
     }
 }
@@ -490,6 +505,7 @@ impl TaskConfig {
             ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
+            ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
@@ -666,6 +682,8 @@ mod tests {
         assert!(err.contains("reward.smoothness_min_speed_mps") && err.contains("-3"), "{err}");
         let err = refused("[reward]\nsmoothness_glide_gain = -1\n");
         assert!(err.contains("reward.smoothness_glide_gain") && err.contains("-1"), "{err}");
+        let err = refused("[reward]\nenergy_min_speed_mps = -2.5\n");
+        assert!(err.contains("reward.energy_min_speed_mps") && err.contains("-2.5"), "{err}");
         let err = refused("[reference]\nlevel_probability = 1.5\n");
         assert!(err.contains("reference.level_probability") && err.contains("1.5"), "{err}");
         let err = refused("[reference]\nlevel_speed_mps = [3.5, 2.5]\n");

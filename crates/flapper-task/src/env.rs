@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
-use crate::config::{SMOOTHNESS_GLIDE_MIN_RATIO, SMOOTHNESS_GLIDE_SINK_MPS, SMOOTHNESS_SPEED_RAMP_MPS, TaskConfig};
+use crate::config::{SMOOTHNESS_GLIDE_MIN_RATIO, SMOOTHNESS_GLIDE_SINK_MPS, TaskConfig, speed_ramp};
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
@@ -235,7 +235,8 @@ impl FlightEnv {
                 absolute_power_w: power,
                 action_change,
             },
-        );
+        )
+        .with_energy_priced(self.energy_price_share());
         let end = if fault.is_some() {
             Some(EpisodeEnd::SimulationFault)
         } else if let Some(failure) = check_failure(&self.config.episode, error, roll, pitch) {
@@ -313,6 +314,13 @@ impl FlightEnv {
         self.observation.write(&self.reference, self.step, sim.base_position_m(), sim.orientation(), out);
     }
 
+    /// The share of the energy's price paid at the current step: the speed ramp of
+    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0).
+    pub fn energy_price_share(&self) -> f64 {
+        let min_speed = self.config.reward.energy_min_speed_mps;
+        if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 }
+    }
+
     /// The weight of the learner's smoothness term for the action chosen at the current observation:
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
     /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
@@ -327,10 +335,7 @@ impl FlightEnv {
             let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
             weight *= (-(turn / reward.smoothness_turn_scale_degps).powi(2)).exp();
         }
-        if reward.smoothness_min_speed_mps > 0.0 {
-            let below = reward.smoothness_min_speed_mps - self.reference.speed(self.step);
-            weight *= (1.0 - below / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0);
-        }
+        weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         if reward.smoothness_glide_gain > 0.0 {
             let velocity = self.reference.velocity(self.step);
             let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));

@@ -53,6 +53,14 @@ impl RewardTerms {
         }
     }
 
+    /// The energy priced in part: r_energy moved from its kernel value towards its top (1) by the
+    /// share of the price waived, `share` 1 leaving it as it is and 0 reading 1 whatever the power
+    /// (`reward.energy_min_speed_mps`).
+    pub fn with_energy_priced(self, share: f64) -> Self {
+        // In full: the kernel's own value, bit for bit (1 - (1 - e) need not be e).
+        if share >= 1.0 { self } else { Self { energy: 1.0 - share.max(0.0) * (1.0 - self.energy), ..self } }
+    }
+
     /// The weighted sum.
     pub fn total(&self, config: &RewardConfig) -> f64 {
         config.position_weight * self.position
@@ -74,6 +82,15 @@ impl RewardTerms {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_energy_priced_in_part_moves_its_kernel_towards_the_top_and_leaves_the_other_terms() {
+        let terms = RewardTerms { position: 0.9, body_rate: 0.8, level: 0.7, energy: 0.2, action_rate: 0.6 };
+        assert_eq!(terms.with_energy_priced(1.0), terms, "in full: unchanged, bit for bit");
+        assert_eq!(terms.with_energy_priced(0.0), RewardTerms { energy: 1.0, ..terms }, "waived: the top");
+        assert!((terms.with_energy_priced(0.5).energy - 0.6).abs() < 1e-12, "half the price: halfway up");
+        assert_eq!(terms.with_energy_priced(0.5).position, terms.position);
+    }
 
     fn ideal() -> RewardInputs {
         RewardInputs {

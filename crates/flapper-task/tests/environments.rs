@@ -470,6 +470,38 @@ fn the_smoothness_weight_falls_below_its_speed_and_multiplies_the_turns_weight()
 }
 
 #[test]
+fn the_energy_is_priced_in_full_above_its_speed_and_not_at_all_below_its_ramp() {
+    // Straight level paths at 2.9, 3.25 and 3.8 m/s, 2 s each (dt 0.02 s).
+    let level = |speed: f64| {
+        let points = (0..=100).map(|k| Vec3::new(speed * 0.02 * k as f64, 0.0, 10.0)).collect();
+        Arc::new(Reference::new(format!("level {speed}"), 0.02, points))
+    };
+    let flown = |reference: Arc<Reference>, min_speed: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.energy_min_speed_mps = min_speed;
+        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let share = env.energy_price_share();
+        // A full stroke: the joints work, so the kernel is well below its top when priced.
+        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
+        (share, step)
+    };
+    let (share, priced) = flown(level(2.9), 0.0);
+    assert_eq!(share, 1.0, "off: priced at every speed");
+    assert!(priced.terms.energy < 0.99, "the stroke costs: {:?}", priced.terms);
+    let (share, free) = flown(level(2.9), 3.5);
+    assert_eq!(share, 0.0, "0.6 m/s below: past the 0.5 m/s ramp");
+    assert_eq!(free.terms.energy, 1.0, "not priced: the kernel's top whatever the power");
+    // The same flight: only the energy kernel and the reward move.
+    assert_eq!((free.position_error_m, free.terms.position), (priced.position_error_m, priced.terms.position));
+    let weight = TaskConfig::default().reward.energy_weight;
+    assert!((free.reward - priced.reward - weight * (1.0 - priced.terms.energy)).abs() < 1e-9);
+    assert!((flown(level(3.25), 3.5).0 - 0.5).abs() < 1e-4, "halfway down the ramp");
+    let (share, fast) = flown(level(3.8), 3.5);
+    assert_eq!(share, 1.0, "above the speed: in full");
+    assert_eq!(fast.terms, flown(level(3.8), 0.0).1.terms, "in full is the kernel itself, bit for bit");
+}
+
+#[test]
 fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climbs_or_dives() {
     // Straight paths at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
     let sloped = |vertical: f64| {
