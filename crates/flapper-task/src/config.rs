@@ -117,7 +117,7 @@ pub struct RewardConfig {
     /// paths and manoeuvres may change it quickly; 0 weighs every step 1.
     pub smoothness_turn_scale_degps: f64,
     /// Weighs the smoothness term by the reference's speed too: 1 at or above this speed (m/s), falling
-    /// linearly to 0 at [`SMOOTHNESS_SPEED_RAMP_MPS`] below it, so that slow flight, which needs a fast
+    /// linearly to 0 at [`SPEED_RAMP_MPS`] below it, so that slow flight, which needs a fast
     /// stroke and quick corrections, is not asked for a steady one; 0 weighs every speed 1.
     pub smoothness_min_speed_mps: f64,
     /// Weighs the smoothness term more where the reference path sinks at a slope the robot can glide
@@ -127,22 +127,22 @@ pub struct RewardConfig {
     /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
     pub smoothness_glide_gain: f64,
     /// Prices the energy by the reference's speed: in full at or above this speed (m/s), less and less
-    /// over the [`SMOOTHNESS_SPEED_RAMP_MPS`] below it and not at all further down, where r_energy reads
+    /// over the [`SPEED_RAMP_MPS`] below it and not at all further down, where r_energy reads
     /// its top (1) whatever the power. Slow flight needs power (the robot's power curve rises below
     /// its cruise speed), and a price on it teaches the policy to fly faster than asked; 0 prices the
     /// energy at every speed.
     pub energy_min_speed_mps: f64,
 }
 
-/// Over how much speed below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0, and
-/// below `reward.energy_min_speed_mps` the energy's price (m/s).
-pub const SMOOTHNESS_SPEED_RAMP_MPS: f64 = 0.5;
+/// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
+/// and below `reward.energy_min_speed_mps` the energy's price.
+pub const SPEED_RAMP_MPS: f64 = 0.5;
 
 /// The share of a per-step weight kept at `speed` (m/s) by a floor of `min_speed`: 1 at or above it,
-/// falling linearly to 0 over the [`SMOOTHNESS_SPEED_RAMP_MPS`] below it; 1 at every speed where
+/// falling linearly to 0 over the [`SPEED_RAMP_MPS`] below it; 1 at every speed where
 /// `min_speed` is 0 (off).
 pub fn speed_ramp(min_speed: f64, speed: f64) -> f64 {
-    if min_speed > 0.0 { (1.0 - (min_speed - speed) / SMOOTHNESS_SPEED_RAMP_MPS).clamp(0.0, 1.0) } else { 1.0 }
+    if min_speed > 0.0 { (1.0 - (min_speed - speed) / SPEED_RAMP_MPS).clamp(0.0, 1.0) } else { 1.0 }
 }
 
 /// The sink rate from which `reward.smoothness_glide_gain` weighs in full (m/s): the gentlest glide
