@@ -33,7 +33,7 @@ impl ActorCritic {
         Self {
             actor: Mlp::new(&sizes(&config.actor_hidden, action_size), config.activation, 0.01, rng),
             critic: Mlp::new(&sizes(&config.critic_hidden, 1), config.activation, 1.0, rng),
-            log_std: vec![config.init_noise_std.ln(); action_size],
+            log_std: vec![libm::logf(config.init_noise_std); action_size],
             normalizer: Normalizer::new(observation_size),
         }
     }
@@ -63,7 +63,7 @@ impl ActorCritic {
 
     /// Mean standard deviation over actions.
     pub fn mean_std(&self) -> f32 {
-        self.log_std.iter().map(|s| s.exp()).sum::<f32>() / self.log_std.len() as f32
+        self.log_std.iter().map(|&s| libm::expf(s)).sum::<f32>() / self.log_std.len() as f32
     }
 }
 

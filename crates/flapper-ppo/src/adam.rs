@@ -1,5 +1,7 @@
 //! Adam (Kingma and Ba), as PyTorch implements it, and global gradient-norm clipping.
 
+use rayon::prelude::*;
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Adam {
     pub learning_rate: f32,
@@ -25,8 +27,9 @@ impl Adam {
         }
     }
 
-    /// One update of `params` against `grads`.
-    pub fn step(&mut self, params: &mut [f32], grads: &[f32]) {
+    /// One update of `params` against `grads`, the parameters shared out over `threads` threads in
+    /// slices (each parameter's update is its own: the same bits on any thread count).
+    pub fn step(&mut self, params: &mut [f32], grads: &[f32], threads: usize) {
         assert_eq!(params.len(), self.first_moment.len());
         assert_eq!(grads.len(), params.len());
         self.steps += 1;
@@ -35,13 +38,30 @@ impl Adam {
         let correction2 = 1.0 - self.beta2.powi(t);
         let step_size = self.learning_rate / correction1;
         let (b1, b2, eps) = (self.beta1, self.beta2, self.epsilon);
-        for (((p, &g), m), v) in params.iter_mut().zip(grads).zip(&mut self.first_moment).zip(&mut self.second_moment) {
-            *m = b1 * *m + (1.0 - b1) * g;
-            *v = b2 * *v + (1.0 - b2) * g * g;
-            *p -= step_size * *m / ((*v / correction2).sqrt() + eps);
+        let update = |(((p, g), m), v): Slices| {
+            for (((p, &g), m), v) in p.iter_mut().zip(g).zip(m).zip(v) {
+                *m = b1 * *m + (1.0 - b1) * g;
+                *v = b2 * *v + (1.0 - b2) * g * g;
+                *p -= step_size * *m / ((*v / correction2).sqrt() + eps);
+            }
+        };
+        /// Parameters per slice handed to a thread.
+        const SLICE: usize = 8192;
+        if threads >= 2 {
+            params
+                .par_chunks_mut(SLICE)
+                .zip(grads.par_chunks(SLICE))
+                .zip(self.first_moment.par_chunks_mut(SLICE))
+                .zip(self.second_moment.par_chunks_mut(SLICE))
+                .for_each(update);
+        } else {
+            update((((params, grads), &mut self.first_moment[..]), &mut self.second_moment[..]));
         }
     }
 }
+
+/// One slice of the parameters with its gradients and first and second moments, as zipped iterators pair them.
+type Slices<'a> = (((&'a mut [f32], &'a [f32]), &'a mut [f32]), &'a mut [f32]);
 
 /// Scales `grads` so their global L2 norm is at most `max_norm`; returns the norm before clipping.
 pub fn clip_grad_norm(grads: &mut [f32], max_norm: f32) -> f32 {
@@ -61,7 +81,7 @@ mod tests {
     fn first_step_moves_each_parameter_by_the_learning_rate_against_its_gradient() {
         let mut adam = Adam::new(3, 1e-3);
         let mut params = [1.0, -2.0, 0.5];
-        adam.step(&mut params, &[0.3, -40.0, 0.0]);
+        adam.step(&mut params, &[0.3, -40.0, 0.0], 1);
         assert!((params[0] - (1.0 - 1e-3)).abs() < 1e-6);
         assert!((params[1] - (-2.0 + 1e-3)).abs() < 1e-6);
         assert_eq!(params[2], 0.5);
@@ -73,9 +93,23 @@ mod tests {
         let mut p = [3.0f32, -4.0];
         for _ in 0..2000 {
             let grads = [2.0 * (p[0] - 1.0), 2.0 * (p[1] + 2.0)];
-            adam.step(&mut p, &grads);
+            adam.step(&mut p, &grads, 1);
         }
         assert!((p[0] - 1.0).abs() < 1e-2 && (p[1] + 2.0).abs() < 1e-2, "{p:?}");
+    }
+
+    #[test]
+    fn threads_update_each_parameter_as_one_thread_does() {
+        let grads: Vec<f32> = (0..20_000).map(|i| ((i * 7919) % 1000) as f32 * 1e-3 - 0.5).collect();
+        let start: Vec<f32> = (0..20_000).map(|i| ((i * 104_729) % 997) as f32 * 1e-2).collect();
+        let (mut one, mut three) = (Adam::new(20_000, 1e-3), Adam::new(20_000, 1e-3));
+        let (mut p1, mut p3) = (start.clone(), start);
+        for _ in 0..3 {
+            one.step(&mut p1, &grads, 1);
+            three.step(&mut p3, &grads, 3);
+        }
+        assert_eq!(one, three);
+        assert!(p1.iter().zip(&p3).all(|(a, b)| a.to_bits() == b.to_bits()));
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //!
 //! - `vec_env`: the interface every batch of environments implements;
 //! - `normalizer`, `actor_critic`: the policy (observation statistics, actor, log-std, critic), built
-//!   on `mlp` (forward and backward by hand on `matmul`/gemm, `fast_math` for the activations);
+//!   on `mlp` (forward and backward by hand on `fixed_matmul`, one arithmetic on every CPU, `fast_math` for
+//!   the activations; `normal` for the exploration noise);
 //!   `exact_inference`: the CPU-independent forward pass that flies a trained policy;
 //! - `storage`: the rollout and its generalized advantages;
 //! - `ppo`: acting, bootstrapping truncated episodes, the update (`loss`: the clipped loss and its
@@ -20,9 +21,10 @@ pub mod config;
 pub mod evaluate;
 pub mod exact_inference;
 pub mod fast_math;
+pub mod fixed_matmul;
 pub mod loss;
-pub mod matmul;
 pub mod mlp;
+pub mod normal;
 pub mod normalizer;
 pub mod ppo;
 pub mod run_folder;

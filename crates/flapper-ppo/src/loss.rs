@@ -1,6 +1,12 @@
 //! The PPO loss and its gradients (rsl_rl's `ppo.py` update maths): the clipped surrogate, the
 //! (optionally clipped) value loss and the entropy bonus of one minibatch, differentiated by hand
-//! through the actor, the critic and the log-std, and checked against finite differences below.
+//! through the actor, the critic and the log-std, and checked against finite differences below. A
+//! minibatch is computed in [`CHUNKS`] fixed chunks whose gradients are added in a fixed order, so
+//! the result is the same on any number of threads (and, through [`crate::fixed_matmul`], any CPU).
+
+use std::ops::Range;
+
+use rayon::prelude::*;
 
 use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
 use crate::config::PpoConfig;
@@ -21,6 +27,34 @@ impl Gradients {
             critic: vec![0.0; policy.critic.params().len()],
             log_std: vec![0.0; policy.log_std.len()],
         }
+    }
+
+    /// Sets each gradient to the sum of `parts`' (`((p0 + p1) + p2) + ...`, in the order given), the
+    /// parameters shared out over `threads` threads in slices: each element's sum is the same in any slice.
+    fn add_in_order(&mut self, parts: &[&Gradients], threads: usize) {
+        /// Parameters per slice: large enough to amortize handing out, small enough to balance.
+        const SLICE: usize = 8192;
+        let (first, rest) = parts.split_first().expect("at least one chunk");
+        for (which, out) in [&mut self.actor, &mut self.critic, &mut self.log_std].into_iter().enumerate() {
+            let sum_slice = |start: usize, out: &mut [f32]| {
+                out.copy_from_slice(&first.tensors()[which][start..start + out.len()]);
+                for part in rest {
+                    for (o, x) in out.iter_mut().zip(&part.tensors()[which][start..]) {
+                        *o += x;
+                    }
+                }
+            };
+            if threads >= 2 {
+                out.par_chunks_mut(SLICE).enumerate().for_each(|(s, slice)| sum_slice(s * SLICE, slice));
+            } else {
+                sum_slice(0, out);
+            }
+        }
+    }
+
+    /// The actor's, the critic's and the log-std's gradients, in that order.
+    fn tensors(&self) -> [&[f32]; 3] {
+        [&self.actor, &self.critic, &self.log_std]
     }
 
     /// Scales all gradients together so their global L2 norm is at most `max_norm`; returns the norm
@@ -83,19 +117,37 @@ pub struct LossTerms {
     pub total: f64,
 }
 
-/// Scratch buffers of the loss computation.
+/// How many chunks a minibatch is split into, whatever the thread count: each chunk's forward and
+/// backward pass runs on one thread, and the chunks' gradients and loss sums are added in chunk
+/// order. A constant, so that 1, 2 or 16 threads compute the same bits; 16 keeps 16 cores busy.
+pub const CHUNKS: usize = 16;
+
+/// Scratch buffers of the loss computation, one set per chunk.
 #[derive(Debug, Clone, Default)]
 pub struct LossScratch {
+    chunks: Vec<ChunkScratch>,
+}
+
+/// One chunk's buffers and results: its gradients and its loss sums (not yet means).
+#[derive(Debug, Clone)]
+struct ChunkScratch {
     actor: Workspace,
     critic: Workspace,
     d_mean: Vec<f32>,
     d_value: Vec<f32>,
+    grads: Gradients,
+    sums: LossTerms,
+}
+
+/// The rows of chunk `chunk` of `n` samples: contiguous, as even as integers allow.
+pub fn chunk_rows(chunk: usize, n: usize) -> Range<usize> {
+    chunk * n / CHUNKS..(chunk + 1) * n / CHUNKS
 }
 
 /// The loss of `batch` under `policy` and its gradient with respect to every parameter (written into
-/// `grads`). The maths of PPO in one function, checked against finite differences in the tests. With
-/// two or more threads the actor's and the critic's halves run side by side, one thread each (at these
-/// sizes that beats splitting each matrix product over the threads).
+/// `grads`). The maths of PPO in one function, checked against finite differences in the tests.
+/// The samples are split into [`CHUNKS`] chunks computed side by side on up to `threads` threads
+/// (the caller's rayon pool), then added in chunk order: the result does not depend on `threads`.
 pub fn loss_and_gradients(
     policy: &ActorCritic,
     config: &PpoConfig,
@@ -104,53 +156,81 @@ pub fn loss_and_gradients(
     grads: &mut Gradients,
     threads: usize,
 ) -> LossTerms {
-    let LossScratch { actor, critic, d_mean, d_value } = scratch;
-    let Gradients { actor: actor_grads, critic: critic_grads, log_std: log_std_grads } = grads;
-    let (mut terms, value_loss) = if threads >= 2 {
-        rayon::join(
-            || policy_loss(policy, config, batch, actor, d_mean, actor_grads, log_std_grads, 1),
-            || value_loss(policy, config, batch, critic, d_value, critic_grads, 1),
-        )
-    } else {
-        (
-            policy_loss(policy, config, batch, actor, d_mean, actor_grads, log_std_grads, threads),
-            value_loss(policy, config, batch, critic, d_value, critic_grads, threads),
-        )
+    scratch.chunks.resize_with(CHUNKS, || ChunkScratch {
+        actor: Workspace::default(),
+        critic: Workspace::default(),
+        d_mean: Vec::new(),
+        d_value: Vec::new(),
+        grads: Gradients::zeros(policy),
+        sums: LossTerms::default(),
+    });
+    let one_chunk = |(index, chunk): (usize, &mut ChunkScratch)| {
+        let rows = chunk_rows(index, batch.size);
+        let ChunkScratch { actor, critic, d_mean, d_value, grads, sums } = chunk;
+        *sums = policy_loss(policy, config, batch, rows.clone(), actor, d_mean, &mut grads.actor, &mut grads.log_std);
+        sums.value = value_loss(policy, config, batch, rows, critic, d_value, &mut grads.critic);
     };
-    terms.value = value_loss;
+    if threads >= 2 {
+        scratch.chunks.par_iter_mut().enumerate().with_max_len(1).for_each(one_chunk);
+    } else {
+        scratch.chunks.iter_mut().enumerate().for_each(one_chunk);
+    }
+    let parts: Vec<&Gradients> = scratch.chunks.iter().map(|c| &c.grads).collect();
+    grads.add_in_order(&parts, threads);
+    // Entropy of a diagonal Gaussian: sum_j (log sigma_j + 1/2 + ln(2 pi)/2), the same for every sample.
+    for g in grads.log_std.iter_mut() {
+        *g -= config.entropy_coef;
+    }
+    let mut terms = LossTerms::default();
+    for sums in scratch.chunks.iter().map(|c| &c.sums) {
+        terms.surrogate += sums.surrogate;
+        terms.value += sums.value;
+        terms.kl += sums.kl;
+        terms.clip_fraction += sums.clip_fraction;
+        terms.smoothness += sums.smoothness;
+    }
+    let n = batch.size as f64;
+    for mean in [&mut terms.surrogate, &mut terms.value, &mut terms.kl, &mut terms.clip_fraction, &mut terms.smoothness] {
+        *mean /= n;
+    }
+    let log_std_sum: f32 = policy.log_std.iter().sum();
+    terms.entropy = (log_std_sum + policy.action_size() as f32 * (0.5 + HALF_LN_2PI)) as f64;
     terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value
         - config.entropy_coef as f64 * terms.entropy
         + config.smoothness_coef as f64 * terms.smoothness;
     terms
 }
 
-/// The clipped surrogate minus the entropy bonus, and its gradients for the actor and the log-std.
+/// The clipped surrogate of the samples `rows` (its sum, not yet divided by the minibatch size), and
+/// its gradients for the actor and the log-std (already divided); the entropy is added by the caller.
 #[allow(clippy::too_many_arguments)]
 fn policy_loss(
     policy: &ActorCritic,
     config: &PpoConfig,
     batch: &Minibatch,
+    rows: Range<usize>,
     workspace: &mut Workspace,
     d_mean: &mut Vec<f32>,
     actor_grads: &mut [f32],
     log_std_grads: &mut [f32],
-    threads: usize,
 ) -> LossTerms {
-    let (n, a_size) = (batch.size, policy.action_size());
-    let inv_n = 1.0 / n as f32;
-    let std: Vec<f32> = policy.log_std.iter().map(|s| s.exp()).collect();
+    let (n, a_size, o_size) = (rows.len(), policy.action_size(), policy.observation_size());
+    let inv_n = 1.0 / batch.size as f32;
+    let std: Vec<f32> = policy.log_std.iter().map(|&s| libm::expf(s)).collect();
     let inv_var: Vec<f32> = std.iter().map(|s| 1.0 / (s * s)).collect();
-    let old_var: Vec<f32> = batch.old_log_std.iter().map(|s| (2.0 * s).exp()).collect();
+    let old_var: Vec<f32> = batch.old_log_std.iter().map(|&s| libm::expf(2.0 * s)).collect();
     let log_std_sum: f32 = policy.log_std.iter().sum();
     let eps = config.clip;
 
-    let means = policy.actor.forward(&batch.observations, n, workspace, threads);
+    let observations = &batch.observations[rows.start * o_size..rows.end * o_size];
+    let means = policy.actor.forward(observations, n, workspace, 1);
     d_mean.resize(n * a_size, 0.0);
     log_std_grads.iter_mut().for_each(|g| *g = 0.0);
     let mut terms = LossTerms::default();
-    for i in 0..n {
+    for (local, i) in rows.enumerate() {
         let row = i * a_size..(i + 1) * a_size;
-        let (mu, action, old_mu) = (&means[row.clone()], &batch.actions[row.clone()], &batch.old_means[row.clone()]);
+        let mu = &means[local * a_size..(local + 1) * a_size];
+        let (action, old_mu) = (&batch.actions[row.clone()], &batch.old_means[row]);
         let mut log_prob = -log_std_sum - a_size as f32 * HALF_LN_2PI;
         let mut kl = 0.0f32;
         for j in 0..a_size {
@@ -160,7 +240,7 @@ fn policy_loss(
             kl += policy.log_std[j] - batch.old_log_std[j] + (old_var[j] + mean_shift * mean_shift) * 0.5 * inv_var[j]
                 - 0.5;
         }
-        let ratio = (log_prob - batch.old_log_probs[i]).exp();
+        let ratio = libm::expf(log_prob - batch.old_log_probs[i]);
         let advantage = batch.advantages[i];
         let unclipped = -advantage * ratio;
         let clipped = -advantage * ratio.clamp(1.0 - eps, 1.0 + eps);
@@ -173,7 +253,7 @@ fn policy_loss(
         let d_log_prob = if unclipped >= clipped { -advantage * ratio * inv_n } else { 0.0 };
         for j in 0..a_size {
             let diff = action[j] - mu[j];
-            d_mean[i * a_size + j] = d_log_prob * diff * inv_var[j];
+            d_mean[local * a_size + j] = d_log_prob * diff * inv_var[j];
             log_std_grads[j] += d_log_prob * (diff * diff * inv_var[j] - 1.0);
         }
         if config.smoothness_coef > 0.0 {
@@ -183,43 +263,34 @@ fn policy_loss(
                 for j in 0..a_size {
                     let gap = mu[j] - neighbour[j];
                     terms.smoothness += (weight * gap * gap) as f64;
-                    d_mean[i * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
+                    d_mean[local * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
                 }
             }
         }
     }
-    // Entropy of a diagonal Gaussian: sum_j (log sigma_j + 1/2 + ln(2 pi)/2), the same for every sample.
-    let entropy = log_std_sum + a_size as f32 * (0.5 + HALF_LN_2PI);
-    for g in log_std_grads.iter_mut() {
-        *g -= config.entropy_coef;
-    }
-    policy.actor.backward(workspace, d_mean, actor_grads, threads);
-    let n = n as f64;
-    terms.surrogate /= n;
-    terms.kl /= n;
-    terms.clip_fraction /= n;
-    terms.smoothness /= n;
-    terms.entropy = entropy as f64;
+    policy.actor.backward(workspace, d_mean, actor_grads, 1);
     terms
 }
 
-/// The (clipped) value loss and its gradient for the critic, scaled by the value-loss coefficient.
+/// The (clipped) value loss of the samples `rows` (its sum, not yet divided by the minibatch size)
+/// and its gradient for the critic, scaled by the value-loss coefficient.
 fn value_loss(
     policy: &ActorCritic,
     config: &PpoConfig,
     batch: &Minibatch,
+    rows: Range<usize>,
     workspace: &mut Workspace,
     d_value: &mut Vec<f32>,
     critic_grads: &mut [f32],
-    threads: usize,
 ) -> f64 {
-    let n = batch.size;
-    let (inv_n, eps) = (1.0 / n as f32, config.clip);
-    let values = policy.critic.forward(&batch.observations, n, workspace, threads);
+    let (n, o_size) = (rows.len(), policy.observation_size());
+    let (inv_n, eps) = (1.0 / batch.size as f32, config.clip);
+    let observations = &batch.observations[rows.start * o_size..rows.end * o_size];
+    let values = policy.critic.forward(observations, n, workspace, 1);
     d_value.resize(n, 0.0);
     let mut total = 0.0f64;
-    for i in 0..n {
-        let (v, target, old) = (values[i], batch.returns[i], batch.old_values[i]);
+    for (local, i) in rows.enumerate() {
+        let (v, target, old) = (values[local], batch.returns[i], batch.old_values[i]);
         let error = v - target;
         let (loss, d) = if config.clipped_value_loss {
             let clipped = old + (v - old).clamp(-eps, eps);
@@ -234,10 +305,10 @@ fn value_loss(
             (error * error, 2.0 * error)
         };
         total += loss as f64;
-        d_value[i] = config.value_loss_coef * d * inv_n;
+        d_value[local] = config.value_loss_coef * d * inv_n;
     }
-    policy.critic.backward(workspace, d_value, critic_grads, threads);
-    total / n as f64
+    policy.critic.backward(workspace, d_value, critic_grads, 1);
+    total
 }
 
 #[cfg(test)]

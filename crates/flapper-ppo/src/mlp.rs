@@ -1,9 +1,10 @@
 //! A multilayer perceptron with ELU (or tanh) hidden layers and a linear output, forward and backward by hand on
-//! [`matmul`]. Parameters live in one flat vector (for Adam, gradient clipping and checkpoints); each
-//! layer's weight is stored [out x in] row-major like PyTorch's `nn.Linear`, so exported tensors load
-//! in PyTorch unchanged.
+//! [`fixed_matmul`](crate::fixed_matmul) (the same bits on every CPU). Parameters live in one flat vector (for
+//! Adam, gradient clipping and checkpoints); each layer's weight is stored [out x in] row-major like PyTorch's
+//! `nn.Linear`, so exported tensors load in PyTorch unchanged.
 
 use std::ops::Range;
+use std::sync::OnceLock;
 
 use rand::Rng;
 
@@ -11,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::exact_inference::dense_layer;
 use crate::fast_math::{elu_in_place, tanh_in_place};
-use crate::matmul::{Product, matmul};
+use crate::fixed_matmul::{Start, Strided, product};
 
 /// One named parameter tensor inside the flat vector.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -57,6 +58,20 @@ pub struct Mlp {
     activation: Activation,
     params: Vec<f32>,
     tensors: Vec<Tensor>,
+    /// Each layer's weight transposed ([in x out]), the layout the forward product reads; made on
+    /// first use after the parameters last changed.
+    transposed: TransposedWeights,
+}
+
+/// A cache of the transposed weights, emptied by every mutable access to the parameters. Two MLPs
+/// are equal when their parameters are, whatever their caches hold.
+#[derive(Debug, Clone, Default)]
+struct TransposedWeights(OnceLock<Vec<Vec<f32>>>);
+
+impl PartialEq for TransposedWeights {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Scratch buffers for one batch: every layer's output (kept for the backward pass) and two deltas.
@@ -87,7 +102,7 @@ impl Mlp {
                 }
             }
         }
-        Self { sizes: sizes.to_vec(), activation, params, tensors }
+        Self { sizes: sizes.to_vec(), activation, params, tensors, transposed: TransposedWeights::default() }
     }
 
     /// An MLP with the given parameters (as `params()` returns them); `None` if their count does not
@@ -102,6 +117,7 @@ impl Mlp {
             activation,
             params,
             tensors,
+            transposed: TransposedWeights::default(),
         })
     }
 
@@ -126,14 +142,36 @@ impl Mlp {
     }
 
     pub fn params_mut(&mut self) -> &mut [f32] {
+        self.transposed = TransposedWeights::default();
         &mut self.params
+    }
+
+    /// Layer `layer`'s weight as [in x out] row-major, from the cache.
+    fn transposed_weight(&self, layer: usize) -> &[f32] {
+        let all = self.transposed.0.get_or_init(|| {
+            (0..self.sizes.len() - 1)
+                .map(|layer| {
+                    let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
+                    let weight = &self.params[self.tensors[2 * layer].range.clone()];
+                    let mut t = vec![0.0; weight.len()];
+                    for (j, row) in weight.chunks_exact(fan_in).enumerate() {
+                        for (i, &w) in row.iter().enumerate() {
+                            t[i * fan_out + j] = w;
+                        }
+                    }
+                    t
+                })
+                .collect()
+        });
+        &all[layer]
     }
 
     pub fn tensors(&self) -> &[Tensor] {
         &self.tensors
     }
 
-    /// Forward pass of `batch` rows of `input`; returns the output rows ([batch x output]).
+    /// Forward pass of `batch` rows of `input`; returns the output rows ([batch x output]). Each row's
+    /// arithmetic is the same alone or in a batch, on any thread count (`threads` split the rows).
     pub fn forward<'w>(&self, input: &[f32], batch: usize, ws: &'w mut Workspace, threads: usize) -> &'w [f32] {
         assert_eq!(input.len(), batch * self.input_size(), "input is not {batch} x {}", self.input_size());
         let layers = self.sizes.len() - 1;
@@ -143,17 +181,14 @@ impl Mlp {
         ws.outputs.resize_with(layers, Vec::new);
         for layer in 0..layers {
             let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
-            let (weight, bias) = (&self.tensors[2 * layer].range, &self.tensors[2 * layer + 1].range);
+            let bias = &self.params[self.tensors[2 * layer + 1].range.clone()];
             let (before, rest) = ws.outputs.split_at_mut(layer);
             let previous: &[f32] = if layer == 0 { &ws.input } else { &before[layer - 1] };
             let out = &mut rest[0];
             out.resize(batch * fan_out, 0.0);
-            // Start from the bias, then add x W^T.
-            for row in out.chunks_exact_mut(fan_out) {
-                row.copy_from_slice(&self.params[bias.clone()]);
-            }
-            let how = Product { a_transposed: false, b_transposed: true, accumulate: true };
-            matmul(out, previous, &self.params[weight.clone()], batch, fan_out, fan_in, how, threads);
+            // out = bias + x W^T, each element one chain from its bias.
+            let weight_t = self.transposed_weight(layer);
+            rows_in_parallel(out, previous, weight_t, batch, fan_out, fan_in, Start::Bias(bias), threads);
             if layer + 1 < layers {
                 self.activation.apply(out);
             }
@@ -197,8 +232,8 @@ impl Mlp {
             let (weight, bias) = (self.tensors[2 * layer].range.clone(), self.tensors[2 * layer + 1].range.clone());
             let previous: &[f32] = if layer == 0 { &ws.input } else { &ws.outputs[layer - 1] };
             // dW [out x in] = delta^T [out x batch] * previous [batch x in]
-            let how = Product { a_transposed: true, b_transposed: false, accumulate: false };
-            matmul(&mut grads[weight.clone()], &ws.delta, previous, fan_out, fan_in, batch, how, threads);
+            let delta_t = Strided::transposed(&ws.delta, fan_out);
+            product(&mut grads[weight.clone()], delta_t, previous, fan_out, fan_in, batch, Start::Zero);
             let d_bias = &mut grads[bias];
             d_bias.fill(0.0);
             for row in ws.delta.chunks_exact(fan_out) {
@@ -209,21 +244,35 @@ impl Mlp {
             if layer > 0 {
                 // delta_prev [batch x in] = delta [batch x out] * W [out x in], times the activation's slope.
                 ws.delta_next.resize(batch * fan_in, 0.0);
-                matmul(
-                    &mut ws.delta_next,
-                    &ws.delta,
-                    &self.params[weight],
-                    batch,
-                    fan_in,
-                    fan_out,
-                    Product::PLAIN,
-                    threads,
-                );
+                let w = &self.params[weight];
+                rows_in_parallel(&mut ws.delta_next, &ws.delta, w, batch, fan_in, fan_out, Start::Zero, threads);
                 self.activation.backpropagate(&mut ws.delta_next, previous);
                 std::mem::swap(&mut ws.delta, &mut ws.delta_next);
             }
         }
     }
+}
+
+/// [`product`] of a row-major `a` [m x k] and `b` [k x n] into `c` [m x n], its rows shared out over
+/// `threads` threads in bands; each row's arithmetic is the same in any band.
+#[allow(clippy::too_many_arguments)] // the shape of a product: output, operands, m n k, start, threads
+fn rows_in_parallel(c: &mut [f32], a: &[f32], b: &[f32], m: usize, n: usize, k: usize, start: Start, threads: usize) {
+    /// Fewer rows than this per band cost more to hand out than they save.
+    const LEAST_ROWS_PER_BAND: usize = 16;
+    let bands = threads.min(m / LEAST_ROWS_PER_BAND).max(1);
+    if bands == 1 {
+        product(c, Strided::rows(a, k), b, m, n, k, start);
+        return;
+    }
+    let rows_per_band = m.div_ceil(bands);
+    rayon::scope(|scope| {
+        for (c_band, a_band) in c.chunks_mut(rows_per_band * n).zip(a.chunks(rows_per_band * k)) {
+            scope.spawn(move |_| {
+                let rows = c_band.len() / n.max(1);
+                product(c_band, Strided::rows(a_band, k), b, rows, n, k, start);
+            });
+        }
+    });
 }
 
 /// Weight and bias of each layer, in order, inside one flat vector.

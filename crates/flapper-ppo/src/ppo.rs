@@ -3,16 +3,15 @@
 //! clipped value loss, an entropy bonus, global gradient clipping, Adam, and the adaptive
 //! learning-rate schedule on the policy's KL divergence. The loss and its gradients are in `loss`.
 
-use rand::Rng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::StandardNormal;
 
 use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
 use crate::adam::Adam;
 use crate::config::{PpoConfig, Schedule};
 use crate::loss::{Gradients, LossScratch, Minibatch, loss_and_gradients};
 use crate::mlp::Workspace;
+use crate::normal::standard_normal;
 use crate::storage::{RolloutStorage, Transition};
 
 /// Adam state for every parameter of the policy (one optimizer over all, as in rsl_rl, kept as
@@ -142,12 +141,12 @@ impl Ppo {
         t.values.clear();
         t.values.extend_from_slice(values);
         t.log_probs.clear();
-        let std: Vec<f32> = self.policy.log_std.iter().map(|l| l.exp()).collect();
+        let std: Vec<f32> = self.policy.log_std.iter().map(|&l| libm::expf(l)).collect();
         let constant = -self.policy.log_std.iter().sum::<f32>() - a_size as f32 * HALF_LN_2PI;
         for env in 0..envs {
             let mut log_prob = constant;
             for (j, sigma) in std.iter().enumerate() {
-                let noise: f32 = self.rng.sample(StandardNormal);
+                let noise = standard_normal(&mut self.rng);
                 let k = env * a_size + j;
                 actions[k] = means[k] + sigma * noise;
                 log_prob -= 0.5 * noise * noise;
@@ -236,9 +235,9 @@ impl Ppo {
                 for adam in [&mut o.actor, &mut o.critic, &mut o.log_std] {
                     adam.learning_rate = self.learning_rate;
                 }
-                o.actor.step(self.policy.actor.params_mut(), &self.grads.actor);
-                o.critic.step(self.policy.critic.params_mut(), &self.grads.critic);
-                o.log_std.step(&mut self.policy.log_std, &self.grads.log_std);
+                o.actor.step(self.policy.actor.params_mut(), &self.grads.actor, self.threads);
+                o.critic.step(self.policy.critic.params_mut(), &self.grads.critic, self.threads);
+                o.log_std.step(&mut self.policy.log_std, &self.grads.log_std, 1);
                 stats.surrogate_loss += terms.surrogate;
                 stats.value_loss += terms.value;
                 stats.entropy += terms.entropy;

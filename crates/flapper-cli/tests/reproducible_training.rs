@@ -1,0 +1,96 @@
+//! Training reproduces bit for bit whatever the thread count and whatever the CPU's vector width:
+//! `flapper train` runs in child processes with 1, 2 and 3 threads, and with the matrix products
+//! forced onto the 8-lane (AVX2) and the one-lane (portable) paths, must write the same training.csv
+//! (timing columns apart) and byte-identical checkpoints; and a golden hash pins the result, so that
+//! CI on another CPU model checks that it computes what this repository's CPUs computed.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use flapper_ppo::fixed_matmul::SIMD_VARIABLE;
+
+/// The paper's networks (540-256-128-64) on a run of seconds: 12 environments x 16 steps, 2 iterations,
+/// minibatches of 48 samples (3 per chunk), so every product's ragged edges are exercised.
+fn config(threads: usize) -> String {
+    format!(
+        "[runner]\nenvs = 12\niterations = 2\ncheckpoint_every = 1\nseed = 5\nthreads = {threads}\n\
+         [ppo]\nsteps_per_env = 16\n[task.episode]\nmax_steps = 40\n"
+    )
+}
+
+/// FNV-1a over the final checkpoint's tensor bytes (networks, optimizer, normalizer, random stream), as `flapper train` writes them on the CPUs this
+/// repository has been run on (Intel Xeon with AVX-512, AMD Zen 4). If this changes, the training
+/// arithmetic changed: every shipped training run changes with it.
+const GOLDEN_CHECKPOINT_HASH: u64 = 0xdf03_1ca4_d2dd_4b3d;
+
+fn train(dir: &Path, name: &str, threads: usize, simd: Option<&str>) -> PathBuf {
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, config(threads)).unwrap();
+    let run = dir.join(name);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_flapper"));
+    command.args(["train", "--config", file.to_str().unwrap(), "--out", run.to_str().unwrap()]);
+    match simd {
+        Some(path) => command.env(SIMD_VARIABLE, path),
+        None => command.env_remove(SIMD_VARIABLE),
+    };
+    let output = command.output().expect("run flapper train");
+    assert!(output.status.success(), "{name}: {}", String::from_utf8_lossy(&output.stderr));
+    run
+}
+
+/// training.csv without the columns that measure time.
+fn learning_columns(run: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(run.join("training.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let keep: Vec<usize> =
+        (0..header.len()).filter(|&i| !header[i].ends_with("time_s") && header[i] != "steps_per_s").collect();
+    lines.map(|line| {
+        let cells: Vec<&str> = line.split(',').collect();
+        keep.iter().map(|&i| cells[i].to_owned()).collect()
+    })
+    .collect()
+}
+
+/// The final checkpoint as (its tensors' bytes, its description less the wall time and the thread count).
+fn checkpoint(run: &Path) -> (Vec<u8>, serde_json::Value) {
+    let bytes = std::fs::read(run.join("checkpoints/iter_000002.safetensors")).unwrap();
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + header_len]).unwrap();
+    let mut description: serde_json::Value =
+        serde_json::from_str(header["__metadata__"]["flapper"].as_str().unwrap()).unwrap();
+    description.as_object_mut().unwrap().remove("wall_time_s").expect("a wall time");
+    let config = description["config_toml"].as_str().unwrap();
+    let without_threads: String = config.lines().filter(|l| !l.starts_with("threads =")).collect();
+    description["config_toml"] = without_threads.into();
+    (bytes[8 + header_len..].to_vec(), description)
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &b| (hash ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
+#[test]
+fn training_is_the_same_on_any_thread_count_and_any_vector_width() {
+    let dir = std::env::temp_dir().join(format!("flapper-reproducible-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let reference = train(&dir, "threads1", 1, None);
+    let (csv, (tensors, description)) = (learning_columns(&reference), checkpoint(&reference));
+    assert_eq!(csv.len(), 2, "two iterations logged");
+    for (name, threads, simd) in
+        [("threads2", 2, None), ("threads3", 3, None), ("avx2", 2, Some("avx2")), ("portable", 1, Some("portable"))]
+    {
+        let run = train(&dir, name, threads, simd);
+        assert_eq!(learning_columns(&run), csv, "{name}: training.csv differs from one thread's");
+        let (run_tensors, run_description) = checkpoint(&run);
+        assert!(run_tensors == tensors, "{name}: the checkpoint's tensors differ from one thread's");
+        assert_eq!(run_description, description, "{name}: the checkpoint's description differs");
+    }
+    let hash = fnv1a(&tensors);
+    assert_eq!(
+        hash, GOLDEN_CHECKPOINT_HASH,
+        "the training arithmetic changed: the short run's checkpoint hashes to {hash:#018x}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
