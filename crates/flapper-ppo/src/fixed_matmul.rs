@@ -92,6 +92,12 @@ struct Shape {
     k: usize,
 }
 
+/// Terms of `p` taken per sweep over the output by the vector paths: a sweep's slice of `b`
+/// (KC rows of a tile's columns) stays in the L1 cache while every row tile reads it. Each element's
+/// chain goes on where the last sweep stored it: the same operations in the same order.
+#[cfg(target_arch = "x86_64")]
+const KC: usize = 256;
+
 /// The vector path that computes [`product`]: a speed, never a result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Simd {
@@ -201,6 +207,47 @@ mod x86 {
         unsafe fn store(self, ptr: *mut f32, count: usize);
         /// `a * b + self`, rounded once.
         unsafe fn fma(self, a: Self, b: Self) -> Self;
+        /// [`tile`] compiled for this instruction set as a function of its own (inlining every tile
+        /// into one function made the compiler spill the accumulators).
+        unsafe fn tile<const R: usize, const V: usize>(operands: Operands, place: Place);
+    }
+
+    /// What every tile reads and writes.
+    #[derive(Clone, Copy)]
+    struct Operands<'a> {
+        c: *mut f32,
+        a: Strided<'a>,
+        b: &'a [f32],
+        shape: Shape,
+        start: Start<'a>,
+    }
+
+    /// A tile: rows i..i+R, columns j.. (V vectors, `last` lanes of the last), terms `first..end`.
+    #[derive(Clone, Copy)]
+    struct Place {
+        i: usize,
+        j: usize,
+        last: usize,
+        first: usize,
+        end: usize,
+    }
+
+    /// # Safety
+    /// The CPU has AVX2 and FMA; the place lies inside the operands' shapes.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    unsafe fn tile_avx2<const R: usize, const V: usize>(operands: Operands, place: Place) {
+        // SAFETY: as this function's contract.
+        unsafe { tile::<Avx2, R, V>(operands, place) }
+    }
+
+    /// # Safety
+    /// The CPU has AVX-512F; the place lies inside the operands' shapes.
+    #[target_feature(enable = "avx512f,avx2,fma")]
+    #[inline(never)]
+    unsafe fn tile_avx512<const R: usize, const V: usize>(operands: Operands, place: Place) {
+        // SAFETY: as this function's contract.
+        unsafe { tile::<Avx512, R, V>(operands, place) }
     }
 
     #[derive(Clone, Copy)]
@@ -256,6 +303,11 @@ mod x86 {
             // SAFETY: called only inside the kernels compiled for this instruction set.
             Self(unsafe { _mm256_fmadd_ps(a.0, b.0, self.0) })
         }
+        #[inline(always)]
+        unsafe fn tile<const R: usize, const V: usize>(operands: Operands, place: Place) {
+            // SAFETY: only the AVX2 path (checked by `product`) reaches here, with places inside the shapes.
+            unsafe { tile_avx2::<R, V>(operands, place) }
+        }
     }
 
     impl Lanes for Avx512 {
@@ -285,6 +337,11 @@ mod x86 {
             // SAFETY: called only inside the kernels compiled for this instruction set.
             Self(unsafe { _mm512_fmadd_ps(a.0, b.0, self.0) })
         }
+        #[inline(always)]
+        unsafe fn tile<const R: usize, const V: usize>(operands: Operands, place: Place) {
+            // SAFETY: only the AVX-512 path (checked by `product`) reaches here, with places inside the shapes.
+            unsafe { tile_avx512::<R, V>(operands, place) }
+        }
     }
 
     /// # Safety
@@ -305,8 +362,8 @@ mod x86 {
         unsafe { blocks::<Avx512, 6, 4>(c, a, b, shape, start) }
     }
 
-    /// Covers the output with tiles: R rows by V whole vectors while they fit, then single vectors
-    /// and a narrower tile for the columns left (its last vector masked).
+    /// Covers the output with tiles, in sweeps of [`KC`](super::KC) terms: R rows by V whole vectors
+    /// while they fit, then one vector at a time for the columns left (the last one masked).
     #[inline(always)]
     unsafe fn blocks<L: Lanes, const R: usize, const V: usize>(
         c: &mut [f32],
@@ -315,54 +372,44 @@ mod x86 {
         shape: Shape,
         start: Start,
     ) {
-        let n = shape.n;
-        let wide = V * L::WIDTH;
-        let mut j = 0;
-        while j + wide <= n {
-            let mut i = 0;
-            // SAFETY (both calls): the tiles lie inside the shapes `product` checked.
-            while i + R <= shape.m {
-                unsafe { tile::<L, R, V>(c, a, b, shape, start, i, j, L::WIDTH) };
-                i += R;
+        let Shape { m, n, k } = shape;
+        let mut operands = Operands { c: c.as_mut_ptr(), a, b, shape, start };
+        let mut first = 0;
+        loop {
+            let end = (first + super::KC).min(k);
+            let mut j = 0;
+            while j < n {
+                let whole = j + V * L::WIDTH <= n;
+                let last = if whole { L::WIDTH } else { (n - j).min(L::WIDTH) };
+                let mut i = 0;
+                // SAFETY (every call): the tiles lie inside the shapes `product` checked.
+                while i + R <= m {
+                    let place = Place { i, j, last, first, end };
+                    unsafe { if whole { L::tile::<R, V>(operands, place) } else { L::tile::<R, 1>(operands, place) } };
+                    i += R;
+                }
+                for i in i..m {
+                    let place = Place { i, j, last, first, end };
+                    unsafe { if whole { L::tile::<1, V>(operands, place) } else { L::tile::<1, 1>(operands, place) } };
+                }
+                j += if whole { V * L::WIDTH } else { last };
             }
-            for i in i..shape.m {
-                unsafe { tile::<L, 1, V>(c, a, b, shape, start, i, j, L::WIDTH) };
+            if end == k {
+                break;
             }
-            j += wide;
-        }
-        while j < n {
-            // The columns left, narrower than a tile: one vector at a time, the last one masked.
-            let count = (n - j).min(L::WIDTH);
-            let mut i = 0;
-            // SAFETY (both calls): the tiles lie inside the shapes `product` checked.
-            while i + R <= shape.m {
-                unsafe { tile::<L, R, 1>(c, a, b, shape, start, i, j, count) };
-                i += R;
-            }
-            for i in i..shape.m {
-                unsafe { tile::<L, 1, 1>(c, a, b, shape, start, i, j, count) };
-            }
-            j += count;
+            // Later sweeps go on with each element's chain where the last one stored it.
+            operands.start = Start::Output;
+            first = end;
         }
     }
 
-    /// Rows i..i+R and columns j..j + (V - 1) WIDTH + last, each element's whole chain over p in
-    /// registers. `last` lanes of the last vector are used (WIDTH unless at the right edge).
+    /// The tile at `place`: each element's chain over the place's terms, held in registers.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)] // a tile's place: the operands, the shape, its corner, its width
-    unsafe fn tile<L: Lanes, const R: usize, const V: usize>(
-        c: &mut [f32],
-        a: Strided,
-        b: &[f32],
-        shape: Shape,
-        start: Start,
-        i: usize,
-        j: usize,
-        last: usize,
-    ) {
-        let Shape { n, k, .. } = shape;
+    unsafe fn tile<L: Lanes, const R: usize, const V: usize>(operands: Operands, place: Place) {
+        let Operands { c: c_ptr, a, b, shape, start } = operands;
+        let Place { i, j, last, first, end } = place;
+        let n = shape.n;
         let width = |v: usize| if v + 1 == V { last } else { L::WIDTH };
-        let c_ptr = c.as_mut_ptr();
         // SAFETY: rows i..i+R and columns j..j+(V-1)*WIDTH+last lie inside c ([m x n]), b ([k x n]) and
         // the bias ([n]); a[i + r][p] lies inside a (checked by `product` for every i < m, p < k).
         unsafe {
@@ -378,7 +425,7 @@ mod x86 {
                 }
             }
             let b_ptr = b.as_ptr();
-            for p in 0..k {
+            for p in first..end {
                 let row = b_ptr.add(p * n + j);
                 let bs: [L; V] = std::array::from_fn(|v| L::load(row.add(v * L::WIDTH), width(v)));
                 for (r, sums_r) in sums.iter_mut().enumerate() {
@@ -466,7 +513,10 @@ mod tests {
                     results.push(portable_out);
                     for (path, result) in results.iter().enumerate() {
                         let same = result.iter().zip(&expected).all(|(x, y)| x.to_bits() == y.to_bits());
-                        assert!(same, "path {path} differs from the rule at {m} x {n} x {k}, {start:?}, transposed {transposed}");
+                        assert!(
+                            same,
+                            "path {path} differs from the rule at {m} x {n} x {k}, {start:?}, transposed {transposed}"
+                        );
                     }
                 }
             }

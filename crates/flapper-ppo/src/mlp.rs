@@ -188,7 +188,16 @@ impl Mlp {
             out.resize(batch * fan_out, 0.0);
             // out = bias + x W^T, each element one chain from its bias.
             let weight_t = self.transposed_weight(layer);
-            rows_in_parallel(out, previous, weight_t, batch, fan_out, fan_in, Start::Bias(bias), threads);
+            rows_in_parallel(
+                out,
+                Strided::rows(previous, fan_in),
+                weight_t,
+                batch,
+                fan_out,
+                fan_in,
+                Start::Bias(bias),
+                threads,
+            );
             if layer + 1 < layers {
                 self.activation.apply(out);
             }
@@ -233,7 +242,16 @@ impl Mlp {
             let previous: &[f32] = if layer == 0 { &ws.input } else { &ws.outputs[layer - 1] };
             // dW [out x in] = delta^T [out x batch] * previous [batch x in]
             let delta_t = Strided::transposed(&ws.delta, fan_out);
-            product(&mut grads[weight.clone()], delta_t, previous, fan_out, fan_in, batch, Start::Zero);
+            rows_in_parallel(
+                &mut grads[weight.clone()],
+                delta_t,
+                previous,
+                fan_out,
+                fan_in,
+                batch,
+                Start::Zero,
+                threads,
+            );
             let d_bias = &mut grads[bias];
             d_bias.fill(0.0);
             for row in ws.delta.chunks_exact(fan_out) {
@@ -245,7 +263,8 @@ impl Mlp {
                 // delta_prev [batch x in] = delta [batch x out] * W [out x in], times the activation's slope.
                 ws.delta_next.resize(batch * fan_in, 0.0);
                 let w = &self.params[weight];
-                rows_in_parallel(&mut ws.delta_next, &ws.delta, w, batch, fan_in, fan_out, Start::Zero, threads);
+                let delta = Strided::rows(&ws.delta, fan_out);
+                rows_in_parallel(&mut ws.delta_next, delta, w, batch, fan_in, fan_out, Start::Zero, threads);
                 self.activation.backpropagate(&mut ws.delta_next, previous);
                 std::mem::swap(&mut ws.delta, &mut ws.delta_next);
             }
@@ -253,24 +272,23 @@ impl Mlp {
     }
 }
 
-/// [`product`] of a row-major `a` [m x k] and `b` [k x n] into `c` [m x n], its rows shared out over
-/// `threads` threads in bands; each row's arithmetic is the same in any band.
+/// [`product`] of `a` [m x k] and a row-major `b` [k x n] into `c` [m x n], the rows of `c` shared out
+/// over `threads` threads in bands; each element's chain is the same in any band.
 #[allow(clippy::too_many_arguments)] // the shape of a product: output, operands, m n k, start, threads
-fn rows_in_parallel(c: &mut [f32], a: &[f32], b: &[f32], m: usize, n: usize, k: usize, start: Start, threads: usize) {
+fn rows_in_parallel(c: &mut [f32], a: Strided, b: &[f32], m: usize, n: usize, k: usize, start: Start, threads: usize) {
     /// Fewer rows than this per band cost more to hand out than they save.
     const LEAST_ROWS_PER_BAND: usize = 16;
     let bands = threads.min(m / LEAST_ROWS_PER_BAND).max(1);
     if bands == 1 {
-        product(c, Strided::rows(a, k), b, m, n, k, start);
+        product(c, a, b, m, n, k, start);
         return;
     }
     let rows_per_band = m.div_ceil(bands);
     rayon::scope(|scope| {
-        for (c_band, a_band) in c.chunks_mut(rows_per_band * n).zip(a.chunks(rows_per_band * k)) {
-            scope.spawn(move |_| {
-                let rows = c_band.len() / n.max(1);
-                product(c_band, Strided::rows(a_band, k), b, rows, n, k, start);
-            });
+        for (band, c_band) in c.chunks_mut(rows_per_band * n).enumerate() {
+            let first = band * rows_per_band;
+            let a_band = Strided { values: &a.values[first * a.row_stride..], ..a };
+            scope.spawn(move |_| product(c_band, a_band, b, c_band.len() / n, n, k, start));
         }
     });
 }
@@ -351,6 +369,26 @@ mod tests {
         assert_eq!(net.params().len(), 540 * 256 + 256 + 256 * 128 + 128 + 128 * 64 + 64 + 64 * 5 + 5);
         let output = &net.params()[net.tensors()[6].range.clone()];
         assert!(output.iter().all(|w| w.abs() <= 0.01 / 8.0 + 1e-9), "output gain applied");
+    }
+
+    #[test]
+    fn forward_and_backward_give_the_same_bits_on_any_thread_count() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let net = Mlp::new(&[37, 48, 20, 3], Activation::Elu, 1.0, &mut rng);
+        let batch = 70;
+        let x: Vec<f32> = (0..batch * 37).map(|_| rng.random_range(-2.0..2.0)).collect();
+        let d: Vec<f32> = (0..batch * 3).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let run = |threads: usize| {
+            let mut ws = Workspace::default();
+            let y = net.forward(&x, batch, &mut ws, threads).to_vec();
+            let mut grads = vec![0.0; net.params().len()];
+            net.backward(&mut ws, &d, &mut grads, threads);
+            (y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), grads.iter().map(|g| g.to_bits()).collect::<Vec<_>>())
+        };
+        let one = run(1);
+        for threads in [2, 3, 5] {
+            assert!(run(threads) == one, "{threads} threads differ from one");
+        }
     }
 
     #[test]
