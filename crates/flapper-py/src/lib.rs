@@ -183,11 +183,7 @@ impl VecEnvCore {
     /// Steps every environment with its row of `actions` (float32, [N, 5], finite). Returns
     /// (observations, rewards, terminated, truncated, info arrays); see `vector_env.py`.
     #[allow(clippy::type_complexity)]
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        actions: PyReadonlyArray2<'py, f32>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    fn step<'py>(&mut self, py: Python<'py>, actions: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyDict>> {
         let (n, shape) = (self.envs.len(), actions.shape().to_vec());
         if shape != [n, ACTION_SIZE] {
             return Err(PyValueError::new_err(format!("actions must have shape ({n}, {ACTION_SIZE}), got {shape:?}")));
@@ -216,7 +212,7 @@ impl VecEnvCore {
         let term = |f: fn(&flapper_task::reward::RewardTerms) -> f64| {
             terms.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
         };
-        let out = pyo3::types::PyDict::new(py);
+        let out = PyDict::new(py);
         out.set_item("observations", rows(py, self.envs.observations(), size)?)?;
         out.set_item("final_observations", rows(py, self.envs.final_observations(), size)?)?;
         out.set_item("rewards", PyArray1::from_slice(py, self.envs.rewards()))?;
