@@ -9,7 +9,7 @@ use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{TrackingController, evaluate_tracking};
 use flapper_eval::tracking_report::{
-    TrackingSummary, write_observations_csv, write_steps_csv, write_summary_csv, write_tracking_plots,
+    TrackingSummary, write_observations_csv, write_start_json, write_steps_csv, write_summary_csv, write_tracking_plots,
 };
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
@@ -76,6 +76,7 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
                 flapper_eval::tracking::record_episode(robot, controller, task, reference.clone(), seed, 0)?;
             let names = flapper_task::observation::ObservationLayout::of(&task.observation).names();
             write_observations_csv(&record, &names, &dir.join("observations.csv"))?;
+            write_start_json(&record, &dir.join("start.json"))?;
         }
         let plots = write_tracking_plots(&results, &format!("{name} on {}", reference.name()), &dir, 3)?;
         eprintln!(
@@ -131,7 +132,8 @@ pub struct EvalArgs {
     #[arg(long, conflicts_with_all = ["policy", "no_baseline"])]
     pub baseline_only: bool,
     /// Also write what each controller saw and did in episode 0 (observations and actions, one row
-    /// per control step) as PILOT/observations.csv: for checking another implementation.
+    /// per control step) as PILOT/observations.csv, and its initial state as PILOT/start.json: for
+    /// checking another implementation (docs/deploy.md).
     #[arg(long)]
     pub observations: bool,
 }

@@ -79,7 +79,8 @@ enum Command {
     /// Render one flight with MuJoCo's offscreen renderer: a chase-camera video (MP4, needs ffmpeg)
     /// and snapshots overlaid along the manoeuvre with the reference drawn (PNG; needs EGL).
     Render(render::RenderArgs),
-    /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file.
+    /// Write a checkpoint's policy (networks, log-std, normalizer; no optimizer state) as a policy file,
+    /// or a policy for a robot: ONNX, or one C99 header and source file (docs/deploy.md).
     ExportPolicy(export_policy::ExportPolicyArgs),
     /// Check the learner on the inverted pendulum (Gymnasium's InvertedPendulum): train one run per
     /// seed until the mean policy holds the pole for 1000 steps, and report the steps it took.
@@ -148,7 +149,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Robustness(args) => robustness::run(args, model),
         Command::Report(args) => report::run(args, model),
         Command::Render(args) => render::run(args, model),
-        Command::ExportPolicy(args) => export_policy::run(args),
+        Command::ExportPolicy(args) => export_policy::run(args, model),
         Command::Pendulum(args) => pendulum::run(args),
         Command::Bench(args) => bench::run(args, model),
     }

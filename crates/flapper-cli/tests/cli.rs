@@ -219,6 +219,21 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     ]);
     assert_one_line_error(&output, "iter_999.safetensors");
     assert!(!dir.join("never.safetensors").exists());
+    // A running training's checkpoint exports for a robot too, saying which iteration it is.
+    let c_out = dir.join("iter2.c");
+    let output = flapper(&[
+        "export-policy",
+        "--policy",
+        checkpoint.to_str().unwrap(),
+        "--format",
+        "c",
+        "--out",
+        c_out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("a checkpoint of a training run, iteration 2"), "{stdout}");
+    assert!(dir.join("iter2.h").exists());
 
     let eval_out = dir.join("eval");
     let policy = run.join("policy.safetensors");
@@ -507,6 +522,14 @@ fn eval_writes_what_the_policy_saw_and_did() {
     let steps = std::fs::read_to_string(out.join("policy/steps.csv")).unwrap().lines().count() - 1;
     assert_eq!(rows.len(), steps, "one row per control step of episode 0");
     assert_eq!(rows[0][previous], 0.0);
+    // start.json: the state episode 0 began in, every number to the bit (docs/deploy.md flies from it).
+    let start: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("policy/start.json")).unwrap()).unwrap();
+    let quaternion: Vec<f64> =
+        start["orientation_wxyz"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!((quaternion.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-12, "{quaternion:?}");
+    assert_eq!(rows[0][column("t-0.quat_w")] as f32, quaternion[0] as f32);
+    assert_eq!(start["joint_positions_rad"], serde_json::json!([0.0, 0.0, 0.0, 0.0, 0.0]));
     for pair in rows.windows(2) {
         assert!(
             (pair[1][previous] - pair[0][action].clamp(-1.0, 1.0)).abs() < 1e-6,
@@ -515,6 +538,49 @@ fn eval_writes_what_the_policy_saw_and_did() {
             pair[0][action]
         );
     }
+}
+
+#[test]
+fn export_policy_writes_c_with_its_size_and_latency_and_refuses_bad_input_with_one_line() {
+    let dir = scratch("export-c");
+    let policy = shipped_policy("stage1");
+    let out = dir.join("stage1_policy.c");
+    let output = flapper(&["export-policy", "--policy", &policy, "--format", "c", "--out", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("(a policy file, iteration"), "{stdout}");
+    assert!(stdout.contains("179520 multiply-adds") && stdout.contains("724212 bytes"), "{stdout}");
+    assert!(stdout.contains("one call of the compiled C: ") && stdout.contains(" us on this CPU"), "{stdout}");
+    let header = std::fs::read_to_string(dir.join("stage1_policy.h")).unwrap();
+    assert!(header.contains("void flapper_policy_act(const float obs[540], float actions[5]);"), "{header}");
+    let source = std::fs::read_to_string(&out).unwrap();
+    assert!(!source.contains("malloc") && source.matches("#include <").collect::<Vec<_>>() == ["#include <"]);
+
+    let before = std::fs::read(&out).unwrap();
+    let again = flapper(&["export-policy", "--policy", &policy, "--format", "c", "--out", out.to_str().unwrap()]);
+    assert_one_line_error(&again, "exists; choose another name");
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+    let text = dir.join("notes.txt");
+    std::fs::write(&text, "not a policy").unwrap();
+    let not_policy = dir.join("never.c");
+    let output = flapper(&[
+        "export-policy",
+        "--policy",
+        text.to_str().unwrap(),
+        "--format",
+        "c",
+        "--out",
+        not_policy.to_str().unwrap(),
+    ]);
+    assert_one_line_error(&output, "is not a flapper policy or checkpoint");
+    assert!(!not_policy.exists());
+    let output = flapper(&["export-policy", "--policy", &policy, "--format", "tflite", "--out", "x.tflite"]);
+    assert_one_line_error(&output, "unknown --format 'tflite' (the formats are safetensors, onnx, c)");
+    let output =
+        flapper(&["export-policy", "--policy", &policy, "--format", "c", "--out", dir.join("p.txt").to_str().unwrap()]);
+    assert_one_line_error(&output, "NAME.c");
+    let output = flapper(&["export-policy", "--policy", &policy, &policy, "--format", "onnx", "--out", "x.onnx"]);
+    assert_one_line_error(&output, "--format onnx exports one policy, got 2 files");
 }
 
 #[test]

@@ -16,7 +16,7 @@ pub use controller::{Controller, FlightState, GlideController};
 pub use flight::{FlightSpec, fly, fly_simulator};
 pub use flight_log::{FlightLog, FlightRow, FlightSummary};
 pub use plots::{write_flight_plots, write_path_views};
-pub use policy_file::{PolicyFileError, load_flight_policy};
+pub use policy_file::{FlightPolicyFile, PolicyFileError, load_flight_policy, load_flight_policy_file};
 pub use scripted::{ScriptedGait, ScriptedGaitConfig};
 
 /// Writing results failed.

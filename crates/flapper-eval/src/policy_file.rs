@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use flapper_ppo::ActorCritic;
-use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_ppo::checkpoint::{self, CheckpointError, CheckpointInfo};
 use flapper_task::TaskConfig;
 use flapper_task::config::ConfigError;
 
@@ -22,6 +22,21 @@ pub enum PolicyFileError {
 /// A trained flight policy (a policy file or a checkpoint) and the task it was trained on, checked to
 /// fit that task's observation and action layout.
 pub fn load_flight_policy(path: &Path) -> Result<(ActorCritic, TaskConfig), PolicyFileError> {
+    let FlightPolicyFile { policy, task, .. } = load_flight_policy_file(path)?;
+    Ok((policy, task))
+}
+
+/// A flight policy as read from its file, with the file's description.
+#[derive(Debug, Clone)]
+pub struct FlightPolicyFile {
+    pub policy: ActorCritic,
+    pub task: TaskConfig,
+    /// What the file is (a policy, or a checkpoint of a run), its iteration and environment steps.
+    pub info: CheckpointInfo,
+}
+
+/// As [`load_flight_policy`], keeping the file's description (what an export tells about its source).
+pub fn load_flight_policy_file(path: &Path) -> Result<FlightPolicyFile, PolicyFileError> {
     let loaded = checkpoint::load(path)?;
     let origin = format!("{} (its saved config)", path.display());
     let parse = |message: String| PolicyFileError::Parse { origin: origin.clone(), message };
@@ -36,5 +51,5 @@ pub fn load_flight_policy(path: &Path) -> Result<(ActorCritic, TaskConfig), Poli
         .map_err(|error| PolicyFileError::Task { origin: origin.clone(), error })?;
     let layout = flapper_task::observation::ObservationLayout::of(&task.observation);
     loaded.check_layout(path, layout.size(), flapper_task::action::ACTION_SIZE)?;
-    Ok((loaded.policy, task))
+    Ok(FlightPolicyFile { policy: loaded.policy, task, info: loaded.info })
 }

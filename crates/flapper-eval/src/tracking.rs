@@ -218,8 +218,39 @@ fn fly_episodes(
 /// implementation against flapper.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EpisodeTrace {
+    /// The state the episode started from (after the environment's reset), to fly the same start elsewhere.
+    pub start: EpisodeStart,
     pub observations: Vec<Vec<f32>>,
     pub actions: Vec<Vec<f32>>,
+}
+
+/// The robot's state at an episode's start, as MuJoCo holds it (`qpos`, `qvel`): every number to the bit.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct EpisodeStart {
+    /// The main body's frame in the world (m).
+    pub position_m: [f64; 3],
+    /// Body to world, MuJoCo's (w, x, y, z) order.
+    pub orientation_wxyz: [f64; 4],
+    /// World frame (m/s).
+    pub velocity_mps: [f64; 3],
+    /// Body frame p, q, r (rad/s).
+    pub body_rates_radps: [f64; 3],
+    /// q1..q5 (rad); the PD targets and the 7 Hz filter start here too.
+    pub joint_positions_rad: [f64; N_ACTUATED_JOINTS],
+    pub joint_velocities_radps: [f64; N_ACTUATED_JOINTS],
+}
+
+impl EpisodeStart {
+    fn read(state: &FlightState) -> Self {
+        Self {
+            position_m: state.position_m.to_array(),
+            orientation_wxyz: flapper_sim::quat_to_wxyz(state.orientation),
+            velocity_mps: state.velocity_mps.to_array(),
+            body_rates_radps: state.body_rates_radps.to_array(),
+            joint_positions_rad: state.joint_positions_rad,
+            joint_velocities_radps: state.joint_velocities_radps,
+        }
+    }
 }
 
 /// Episode `episode` of an evaluation with `seed` (the same flight as in [`evaluate_tracking`]),
@@ -234,7 +265,8 @@ pub fn record_episode(
 ) -> Result<(EpisodeResult, EpisodeTrace), ModelError> {
     let config = Arc::new(controller_task(controller, evaluation_task(task, &reference)));
     let env = FlightEnv::new(robot, config, ReferenceSource::Fixed(reference), seed, episode)?;
-    let mut record = EpisodeTrace::default();
+    let start = EpisodeStart::read(&FlightState::read(env.control().sim()));
+    let mut record = EpisodeTrace { start, ..EpisodeTrace::default() };
     let result = fly_episode(env, controller, episode, Some(&mut record));
     Ok((result, record))
 }

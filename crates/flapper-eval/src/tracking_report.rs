@@ -389,6 +389,14 @@ pub fn write_summary_csv(summaries: &[(&str, TrackingSummary)], path: &Path) -> 
     flapper_plot::write_atomically(path, &bytes).map_err(|e| error(&e))
 }
 
+/// `start.json`: the recorded episode's initial state ([`crate::tracking::EpisodeStart`]), every number
+/// written so that it reads back to the same f64.
+pub fn write_start_json(record: &EpisodeTrace, path: &Path) -> Result<(), OutputError> {
+    let text = serde_json::to_string_pretty(&record.start).expect("numbers serialize");
+    flapper_plot::write_atomically(path, text.as_bytes())
+        .map_err(|e| OutputError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
 /// A row of `observations.csv`: the step, what the controller observed (named by the observation layout)
 /// and the actions it chose.
 #[derive(serde::Serialize)]

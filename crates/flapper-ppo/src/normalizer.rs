@@ -12,7 +12,7 @@ pub struct Normalizer {
 }
 
 /// Added to the standard deviation so constant features do not divide by zero.
-const EPSILON: f64 = 1e-2;
+pub const EPSILON: f64 = 1e-2;
 /// Normalized values are clipped to +- this, so a feature that was constant in training cannot blow up.
 pub const CLIP: f32 = 10.0;
 
@@ -58,11 +58,18 @@ impl Normalizer {
         self.count = total;
     }
 
+    /// Feature `i`'s frozen mean and scale as [`Normalizer::normalize`] applies them, in f32:
+    /// `clamp((x - mean) * scale, -CLIP, CLIP)` with `scale = 1 / (sqrt(variance) + EPSILON)` computed in
+    /// f64 (what an exported policy holds, so that it normalizes to the same bits).
+    pub fn frozen_feature(&self, i: usize) -> (f32, f32) {
+        (self.mean[i] as f32, (1.0 / (self.variance[i].sqrt() + EPSILON)) as f32)
+    }
+
     /// Writes (x - mean) / (std + eps), clipped, for every row of `rows` into `out`.
     pub fn normalize(&self, rows: &[f32], out: &mut Vec<f32>) {
         let size = self.size();
         out.resize(rows.len(), 0.0);
-        let feature = |i: usize| (self.mean[i] as f32, (1.0 / (self.variance[i].sqrt() + EPSILON)) as f32);
+        let feature = |i: usize| self.frozen_feature(i);
         if rows.len() == size {
             // One observation (the on-board controller's call): no buffers to allocate.
             for (i, (dst, &x)) in out.iter_mut().zip(rows).enumerate() {

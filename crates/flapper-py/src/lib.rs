@@ -4,8 +4,11 @@
 //! policies and the named references. Every flapper error becomes a Python `ValueError` carrying
 //! flapper's own message.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+use flapper_deploy::{DeployablePolicy, PolicyArrays};
+use flapper_eval::FlightPolicyFile;
 
 use flapper_ppo::ActorCritic;
 use flapper_ppo::actor_critic::InferenceScratch;
@@ -20,6 +23,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
 
 fn value_error(error: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(error.to_string())
@@ -179,11 +183,7 @@ impl VecEnvCore {
     /// Steps every environment with its row of `actions` (float32, [N, 5], finite). Returns
     /// (observations, rewards, terminated, truncated, info arrays); see `vector_env.py`.
     #[allow(clippy::type_complexity)]
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        actions: PyReadonlyArray2<'py, f32>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    fn step<'py>(&mut self, py: Python<'py>, actions: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyDict>> {
         let (n, shape) = (self.envs.len(), actions.shape().to_vec());
         if shape != [n, ACTION_SIZE] {
             return Err(PyValueError::new_err(format!("actions must have shape ({n}, {ACTION_SIZE}), got {shape:?}")));
@@ -212,7 +212,7 @@ impl VecEnvCore {
         let term = |f: fn(&flapper_task::reward::RewardTerms) -> f64| {
             terms.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
         };
-        let out = pyo3::types::PyDict::new(py);
+        let out = PyDict::new(py);
         out.set_item("observations", rows(py, self.envs.observations(), size)?)?;
         out.set_item("final_observations", rows(py, self.envs.final_observations(), size)?)?;
         out.set_item("rewards", PyArray1::from_slice(py, self.envs.rewards()))?;
@@ -280,14 +280,81 @@ fn rows<'py>(py: Python<'py>, flat: &[f32], width: usize) -> PyResult<Bound<'py,
 struct Policy {
     policy: ActorCritic,
     task_toml: String,
+    /// The file as read (for exports: its task and description) and where from.
+    file: FlightPolicyFile,
+    path: PathBuf,
+}
+
+impl Policy {
+    /// The policy with the facts of its task on `model` (an MJCF file; the shipped robot if `None`).
+    fn deployable(&self, model: Option<&str>) -> PyResult<DeployablePolicy> {
+        let robot = match model {
+            Some(path) => RobotModel::load(Path::new(path)),
+            None => RobotModel::flapper(),
+        }
+        .map_err(value_error)?;
+        DeployablePolicy::of(&self.file, &self.path, &robot).map_err(value_error)
+    }
 }
 
 #[pymethods]
 impl Policy {
     #[staticmethod]
     fn load(path: &str) -> PyResult<Self> {
-        let (policy, task) = flapper_eval::load_flight_policy(Path::new(path)).map_err(value_error)?;
-        Ok(Self { policy, task_toml: toml::to_string(&task).map_err(value_error)? })
+        let file = flapper_eval::load_flight_policy_file(Path::new(path)).map_err(value_error)?;
+        Ok(Self {
+            policy: file.policy.clone(),
+            task_toml: toml::to_string(&file.task).map_err(value_error)?,
+            file,
+            path: PathBuf::from(path),
+        })
+    }
+
+    /// The numbers of the deterministic action, as flapper applies them in float32: a dict with
+    /// `normalizer_mean`, `normalizer_scale` ([obs]; normalized = clip((x - mean) * scale, -clip, clip)),
+    /// `normalizer_epsilon`, `normalizer_clip`, `layers` (a list of (weight [out, in], bias [out])) and
+    /// `activation` ("elu" or "tanh", between the layers).
+    fn arrays<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let arrays = PolicyArrays::of(&self.policy);
+        let dict = PyDict::new(py);
+        dict.set_item("normalizer_mean", arrays.normalizer_mean.clone().into_pyarray(py))?;
+        dict.set_item("normalizer_scale", arrays.normalizer_scale.clone().into_pyarray(py))?;
+        dict.set_item("normalizer_epsilon", arrays.normalizer_epsilon)?;
+        dict.set_item("normalizer_clip", arrays.normalizer_clip)?;
+        let layers = PyList::empty(py);
+        for layer in &arrays.layers {
+            let weight =
+                Array2::from_shape_vec((layer.fan_out, layer.fan_in), layer.weight.clone()).map_err(value_error)?;
+            layers.append((weight.into_pyarray(py), layer.bias.clone().into_pyarray(py)))?;
+        }
+        dict.set_item("layers", layers)?;
+        let activation = match arrays.activation {
+            flapper_ppo::mlp::Activation::Elu => "elu",
+            flapper_ppo::mlp::Activation::Tanh => "tanh",
+        };
+        dict.set_item("activation", activation)?;
+        Ok(dict)
+    }
+
+    /// What a robot must know around the policy (observation layout, joints and ranges, rates, filter
+    /// cutoff, training steps) as (key, value) string pairs: the ONNX export's metadata. `model`: an
+    /// MJCF file for the joint ranges (the shipped robot by default).
+    #[pyo3(signature = (model=None))]
+    fn deployment_metadata(&self, model: Option<&str>) -> PyResult<Vec<(String, String)>> {
+        Ok(self.deployable(model)?.facts.metadata())
+    }
+
+    /// Writes the policy as ONNX (opset 17) at `path`, which must not exist: input `obs` float32
+    /// [batch, obs], output `actions` float32 [batch, 5], the normalizer and the clip to [-1, 1] inside
+    /// the graph, [`Policy.deployment_metadata`] as its metadata (docs/deploy.md). Needs the `onnx`
+    /// package (`pip install "flapper[test]"`).
+    #[pyo3(signature = (path, model=None))]
+    fn export_onnx(slf: &Bound<'_, Self>, path: &str, model: Option<&str>) -> PyResult<()> {
+        flapper_deploy::refuse_existing(Path::new(path)).map_err(value_error)?;
+        let metadata = slf.get().deployable(model)?.facts.metadata();
+        let writer = slf.py().import("flapper.onnx_export")?;
+        writer.call_method1("write_onnx", (slf, path, metadata))?;
+        Ok(())
     }
 
     #[getter]
