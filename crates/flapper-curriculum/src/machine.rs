@@ -1,10 +1,10 @@
-//! Which CPU trained a stage. Training is deterministic on one CPU model but not across them: `gemm`
-//! picks its kernels and block sizes from the CPU, and the sums of the update come out grouped
-//! differently (docs/experiments.md, "training across CPU models"). Each stage records its CPU in
-//! `selected.json`, so that whoever re-runs it knows which machine reproduces it row for row.
+//! Which CPU trained a stage. Training computes the same bits on every x86-64 CPU with AVX2 and FMA
+//! (`flapper_ppo::fixed_matmul`); each stage still records its CPU in `selected.json`, so that a run that
+//! does not reproduce somewhere names the two machines (and runs from before the fixed arithmetic say
+//! where they were trained).
 
 /// The CPU as `brand (family F, model M; avx512f)`: the brand string, the family and model numbers that
-/// tell its generation apart, and whether it has AVX-512 (`gemm`'s widest kernels). `None` off x86.
+/// tell its generation apart, and whether it has AVX-512 (the widest vector path). `None` off x86.
 pub fn cpu_model() -> Option<String> {
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     {

@@ -25,7 +25,7 @@ use crate::figure::write_curriculum_figure;
 use crate::glide::glide_fraction;
 use crate::identification::identification_fit_percent;
 use crate::selection::{
-    GateColumns, Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_wall_time_s,
+    GateColumns, Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_validation_time_s, stage_wall_time_s,
 };
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
@@ -385,6 +385,7 @@ fn select(
         iterations,
         env_steps,
         wall_time_s,
+        validation_wall_time_s: Some(stage_validation_time_s(selection)),
         selected_iteration: best.iteration,
         validation_score: best.score.completed_percent,
         validation_rms_m: best.score.mean_rms_m,

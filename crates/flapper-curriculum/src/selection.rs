@@ -231,6 +231,10 @@ pub struct StageOutcome {
     pub env_steps: u64,
     /// Training plus validation.
     pub wall_time_s: f64,
+    /// Of `wall_time_s`, the time spent flying validations (and identifications): the rest trained.
+    /// Absent in runs recorded before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation_wall_time_s: Option<f64>,
     pub selected_iteration: usize,
     /// The selected checkpoint's completion over the validation set (percent) and mean RMS error (m).
     pub validation_score: f64,
@@ -280,6 +284,11 @@ pub fn stage_wall_time_s(selection: &Selection, trained_wall_time_s: f64, last_i
     trained_wall_time_s + after_last_log
 }
 
+/// Of a stage's wall time, what its validations took (every validation flown, identifications included).
+pub fn stage_validation_time_s(selection: &Selection) -> f64 {
+    selection.rows.iter().map(|r| r.validation_s).sum()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -304,6 +313,7 @@ mod tests {
         let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4)], columns: GateColumns::default() };
         assert_eq!(stage_wall_time_s(&selection, 100.0, 20), 101.5);
         assert_eq!(stage_wall_time_s(&selection, 100.0, 21), 100.0, "a stage that trained past its last validation");
+        assert_eq!(stage_validation_time_s(&selection), 1.5 * selection.rows.len() as f64);
     }
 
     #[test]

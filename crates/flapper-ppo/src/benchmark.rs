@@ -85,7 +85,7 @@ pub struct PolicyLatency {
     pub exact_us: f64,
     /// The actor alone through the CPU-independent forward pass.
     pub exact_actor_us: f64,
-    /// The actor alone through the training path (gemm, dispatched on the CPU's features), for comparison.
+    /// The actor alone through the training path (`fixed_matmul`, on the CPU's widest vector path), for comparison.
     pub training_path_us: f64,
     pub calls: usize,
 }
