@@ -133,9 +133,8 @@ impl ValidationConfig {
     /// The names of the entries the named references make: each of `references`, then
     /// `<reference>~<name>` for each randomized one (the procedural ones are drawn later).
     pub fn entry_names(&self) -> Vec<String> {
-        let randomized = self.randomized.iter().flat_map(|r| {
-            r.references.iter().map(|reference| crate::validation::randomized_entry_name(reference, &r.name))
-        });
+        let randomized =
+            self.randomized.iter().flat_map(|r| r.references.iter().map(|reference| r.entry_name(reference)));
         self.references.iter().cloned().chain(randomized).collect()
     }
 
@@ -145,7 +144,15 @@ impl ValidationConfig {
     }
 }
 
+/// Between a reference's name and its randomization's in a randomized entry: `lateral~table3`.
+pub const RANDOMIZED_SEPARATOR: char = '~';
+
 impl RandomizedValidation {
+    /// The entry `reference` makes flown under this randomization: `lateral~table3`.
+    pub fn entry_name(&self, reference: &str) -> String {
+        format!("{reference}{RANDOMIZED_SEPARATOR}{}", self.name)
+    }
+
     /// The randomization as flown (switched on).
     pub fn flown_randomization(&self) -> RandomizationConfig {
         RandomizationConfig { enabled: true, ..self.randomization.clone() }

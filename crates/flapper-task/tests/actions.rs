@@ -5,8 +5,8 @@
 use std::f64::consts::TAU;
 
 use flapper_sim::{ActuatedJoint, RobotModel};
-use flapper_task::action::{ActionMap, ActionMode, OscillatorState, PITCH_SWING_PER_FLAP};
-use flapper_task::config::{ControlConfig, TaskConfig};
+use flapper_task::action::{ActionMap, OscillatorState, PITCH_SWING_PER_FLAP};
+use flapper_task::config::{ActionMode, ControlConfig, TaskConfig};
 
 const PERIOD_S: f64 = 0.02;
 
