@@ -336,10 +336,10 @@ fn argument_errors_show_clap_s_whole_message_and_eval_needs_a_policy() {
     assert_one_line_error(&flapper(&["eval", "--episodes", "1"]), "--baseline-only");
 }
 
-fn shipped_policy(stage: &str) -> String {
+fn shipped_policy(folder: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../policies")
-        .join(stage)
+        .join(folder)
         .join("policy.safetensors")
         .display()
         .to_string()
@@ -348,7 +348,7 @@ fn shipped_policy(stage: &str) -> String {
 #[test]
 fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
     let out = scratch("analysis");
-    let policy = shipped_policy("stage2");
+    let policy = shipped_policy("history/stage2");
     let sysid = out.join("sysid");
     let output = flapper(&["sysid", "--policy", &policy, "--averaged-periods", "2", "--out", sysid.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
@@ -396,7 +396,7 @@ fn analysis_commands_reject_bad_input_with_one_line() {
         &flapper(&["sysid", "--policy", "/no/such/policy.safetensors", "--out", o]),
         "/no/such/policy.safetensors",
     );
-    let policy = shipped_policy("stage2");
+    let policy = shipped_policy("history/stage2");
     assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--amplitude-m", "5", "--out", o]), "--amplitude-m");
     assert_one_line_error(
         &flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]),
@@ -419,7 +419,7 @@ fn analysis_commands_reject_bad_input_with_one_line() {
 fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
     let out = scratch("robustness");
     let o = out.to_str().unwrap();
-    let policy = shipped_policy("stage3");
+    let policy = shipped_policy("history/stage3");
     let args = ["robustness", "--policy", &policy, "--reference", "sharp-turn", "--episodes", "2", "--seed", "5"];
     let output = flapper(&[&args[..], &["--sweeps", "fluid,wind", "--ranges", "0,0.5", "--out", o]].concat());
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
@@ -481,7 +481,7 @@ fn eval_writes_what_the_policy_saw_and_did() {
     // action is the "previous action" of the next row's newest frame (clipped to [-1, 1]), and the
     // first row's previous action is the reset's (every joint at 0: action 0).
     let out = scratch("observations");
-    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage2/policy.safetensors");
+    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/history/stage2/policy.safetensors");
     let output = flapper(&[
         "eval",
         "--policy",

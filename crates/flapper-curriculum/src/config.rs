@@ -467,9 +467,9 @@ task = { stage = 2 }
 
     #[test]
     fn the_flight_modes_recipe_is_the_shipped_curriculum_and_one_stage_more() {
-        // configs/curriculum-flight-modes.toml: the experiment of docs/experiments.md ("The flight-modes
+        // configs/experiments/curriculum-flight-modes.toml: the experiment of docs/experiments.md ("The flight-modes
         // stage in the curriculum"); its first four stages must not drift from the shipped ones.
-        let (c, four) = (shipped("curriculum-flight-modes.toml"), shipped("curriculum.toml"));
+        let (c, four) = (shipped("experiments/curriculum-flight-modes.toml"), shipped("curriculum.toml"));
         assert_eq!(task_stages(&c), [1, 2, 3, 4, 4]);
         assert_eq!(
             (c.seed, c.max_env_steps, &c.runner, &c.ppo),
@@ -478,14 +478,14 @@ task = { stage = 2 }
         assert!(c.stages[..4] == four.stages[..], "stages 1-4 differ from configs/curriculum.toml's");
         let flight_modes = c.stage_train_config(5).unwrap();
         assert!(flight_modes.ppo.smoothness_coef > 0.0 && flight_modes.task.reference.glide_probability > 0.0);
-        check_budget(&c, "curriculum-flight-modes.toml");
+        check_budget(&c, "experiments/curriculum-flight-modes.toml");
     }
 
     #[test]
     fn the_slow_flight_recipe_is_the_shipped_curriculum_and_two_stages_more() {
-        // configs/curriculum-slow-flight.toml: the experiment of docs/experiments.md ("A slow-flight stage
+        // configs/experiments/curriculum-slow-flight.toml: the experiment of docs/experiments.md ("A slow-flight stage
         // before the flight modes", L2 and F2); its first four stages must not drift from the shipped ones.
-        let (c, four) = (shipped("curriculum-slow-flight.toml"), shipped("curriculum.toml"));
+        let (c, four) = (shipped("experiments/curriculum-slow-flight.toml"), shipped("curriculum.toml"));
         assert_eq!(task_stages(&c), [1, 2, 3, 4, 4, 4]);
         assert_eq!(
             (c.seed, c.max_env_steps, &c.runner, &c.ppo),
@@ -495,13 +495,13 @@ task = { stage = 2 }
         let (slow, priced) = (c.stage_train_config(5).unwrap(), c.stage_train_config(6).unwrap());
         assert!(slow.task.reference.level_probability > 0.0 && priced.task.reference.level_probability > 0.0);
         assert_eq!(priced.ppo.smoothness_coef, 0.0, "the recipe without the smoothness term");
-        check_budget(&c, "curriculum-slow-flight.toml");
+        check_budget(&c, "experiments/curriculum-slow-flight.toml");
     }
 
     #[test]
     fn the_oscillator_recipe_reads_with_stage_3_in_two_parts() {
-        // configs/curriculum-oscillator.toml: the flight-modes experiment of docs/experiments.md (OSC14, OSC15).
-        let c = shipped("curriculum-oscillator.toml");
+        // configs/experiments/curriculum-oscillator.toml: the flight-modes experiment of docs/experiments.md (OSC14, OSC15).
+        let c = shipped("experiments/curriculum-oscillator.toml");
         assert_eq!(task_stages(&c), [1, 2, 3, 3, 4]);
         let smoothness: Vec<f32> =
             (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().ppo.smoothness_coef).collect();
