@@ -275,7 +275,6 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
         &flapper(&["train", "--config", range.to_str().unwrap(), "--out", out.to_str().unwrap()]),
         "ppo.lambda",
     );
-    assert_one_line_error(&flapper(&["train", "--stage", "7", "--out", out.to_str().unwrap()]), "stage 7");
     let action = dir.join("action.toml");
     std::fs::write(&action, "[task.control]\naction_mode = \"flap_oscillator\"\nflap_amplitude_max = 9.0\n").unwrap();
     assert_one_line_error(
@@ -334,6 +333,44 @@ fn argument_errors_show_clap_s_whole_message_and_eval_needs_a_policy() {
     assert!(stderr.contains("'eval'"), "did you mean: {stderr}");
     // No silent baseline-only evaluation.
     assert_one_line_error(&flapper(&["eval", "--episodes", "1"]), "--baseline-only");
+}
+
+/// Every numeric flag refuses a negative number naming the flag: a count or a seed as clap's invalid
+/// value (clap would otherwise take `-1` for an unknown flag and name none), the others by their own
+/// range check, before any work. Not here: `fly --tail-deg`, whose negative angles are valid.
+#[test]
+fn a_negative_number_is_refused_naming_its_flag() {
+    let out = scratch("negative");
+    let (o, policy) = (out.to_str().unwrap(), shipped_policy("final"));
+    let p = policy.as_str();
+    let flags: &[(&[&str], &[&str])] = &[
+        (&["eval", "--policy", p, "--out", o], &["--episodes", "--seed"]),
+        (&["train", "--out", o], &["--stage", "--iterations", "--seed", "--envs"]),
+        (&["curriculum", "--out", o], &["--seed", "--until-stage"]),
+        (&["bench"], &["--blocks", "--steps", "--envs", "--threads", "--train-iterations"]),
+        (&["pendulum", "--out", o], &["--seeds", "--max-iterations"]),
+        (&["fly", "--out", o], &["--seconds"]),
+        (&["render", "--policy", p, "--out", o], &["--seed"]),
+        (&["report", "--out", o], &["--episodes", "--robustness-episodes", "--seed"]),
+        (&["robustness", "--policy", p, "--out", o], &["--episodes", "--seed", "--ranges"]),
+        (&["sysid", "--policy", p, "--out", o], &["--seed", "--amplitude-m", "--input-lead-s", "--averaged-periods"]),
+        (&["phase", "--policy", p, "--out", o], &["--speed-mps"]),
+    ];
+    for (command, flags) in flags {
+        for flag in *flags {
+            let args = [command, &[*flag, "-1"][..]].concat();
+            let output = flapper(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let first = stderr.lines().next().unwrap_or_default();
+            assert!(!output.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
+            assert!(first.starts_with("error: ") && first.contains("-1"), "{args:?}: {stderr}");
+            assert!(first.contains(&format!("{flag} ")) || first.contains(&format!("{flag}:")), "{args:?}: {stderr}");
+        }
+    }
+    assert!(std::fs::read_dir(&out).unwrap().next().is_none(), "a refused command writes nothing");
+    let stage = flapper(&["train", "--stage", "7", "--out", o]);
+    let stderr = String::from_utf8_lossy(&stage.stderr);
+    assert!(stderr.starts_with("error: invalid value '7' for '--stage <STAGE>': 7 is not in 1..=4"), "{stderr}");
 }
 
 fn shipped_policy(folder: &str) -> String {
