@@ -116,7 +116,10 @@ fn the_flight_modes_candidate_flies_longitudinal_on_a_third_of_the_final_control
     let results = check_tracks("experiments/smooth", "longitudinal", 4, 4, 0.5);
     for r in &results {
         let energy = r.energy_per_metre_j(0.02);
-        assert!(energy < 4.8, "policies/experiments/smooth on longitudinal: {energy:.2} J/m, over twice the scripted gait's");
+        assert!(
+            energy < 4.8,
+            "policies/experiments/smooth on longitudinal: {energy:.2} J/m, over twice the scripted gait's"
+        );
     }
     check_flies_the_aerobatic_chain("experiments/smooth");
 }
