@@ -609,6 +609,12 @@ task = { stage = 3 }
         let e =
             refused("in-place", "extends = \"../base.toml\"\n[[stages]]\nmodify = \"cruise\"\nafter = \"cruise\"\n");
         assert!(e.contains("in place"), "{e}");
+        let dir = folder(
+            "bad-base",
+            &[("base.toml", "stages = 5\n"), ("experiments/x.toml", "extends = \"../base.toml\"\n")],
+        );
+        let e = CurriculumConfig::load(&dir.join("experiments/x.toml")).unwrap_err().to_string();
+        assert!(e.contains("base.toml': stages must be a list of [[stages]] tables, got 5"), "{e}");
         let e = refused("circle", "extends = \"x.toml\"\n");
         assert!(e.contains("extends 'x.toml', which extends it again"), "{e}");
         let e =

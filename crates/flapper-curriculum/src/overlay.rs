@@ -85,25 +85,36 @@ fn resolve_chain(path: &Path, mut file: Table, seen: &mut Vec<PathBuf>) -> Resul
         message: e.to_string(),
     })?;
     let mut base = resolve_chain(&base_path, base_file, seen)?;
-    let entries = match file.remove("stages") {
-        None => Vec::new(),
-        Some(Value::Array(entries)) => entries,
-        Some(other) => {
-            let message = format!("stages must be a list of [[stages]] tables, got {other}");
-            return Err(OverlayError::Parse { path: shown, message });
-        }
-    };
+    let entries = stage_list(file.remove("stages"), &shown)?;
     merge(&mut base, file);
-    let mut stages = match base.remove("stages") {
-        Some(Value::Array(stages)) => stages.into_iter().filter_map(|s| s.as_table().cloned()).collect(),
-        _ => Vec::new(),
-    };
+    let base_shown = base_path.display().to_string();
+    let mut stages: Vec<Table> = stage_list(base.remove("stages"), &base_shown)?
+        .into_iter()
+        .map(|stage| match stage {
+            Value::Table(stage) => Ok(stage),
+            other => Err(not_stages(&base_shown, &other)),
+        })
+        .collect::<Result<_, _>>()?;
     let names = Names { path: &shown, base: &base_name };
     for (index, entry) in entries.into_iter().enumerate() {
         edit_stages(&mut stages, entry, index + 1, &names)?;
     }
     base.insert("stages".into(), Value::Array(stages.into_iter().map(Value::Table).collect()));
     Ok(base)
+}
+
+/// A file's `stages`: a list (of tables, which the entries' own checks see to), or none.
+fn stage_list(stages: Option<Value>, path: &str) -> Result<Vec<Value>, OverlayError> {
+    match stages {
+        None => Ok(Vec::new()),
+        Some(Value::Array(list)) => Ok(list),
+        Some(other) => Err(not_stages(path, &other)),
+    }
+}
+
+fn not_stages(path: &str, value: &Value) -> OverlayError {
+    let message = format!("stages must be a list of [[stages]] tables, got {value}");
+    OverlayError::Parse { path: path.to_owned(), message }
 }
 
 /// `over`'s keys into `base`: a table into a table key by key, any other value in place of the base's.
