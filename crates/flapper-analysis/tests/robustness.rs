@@ -25,7 +25,8 @@ fn assert_same(a: &Tally, b: &Tally, what: &str) {
 /// The shipped stage-3 policy and the sharp-turn reference: small runs of the sweeps.
 fn stage3_on_sharp_turn() -> (RobotModel, TrackingController, TaskConfig, Arc<Reference>) {
     let robot = RobotModel::flapper().unwrap();
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage3/policy.safetensors");
+    let path =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/history/stage3/policy.safetensors");
     let (policy, task) = load_flight_policy(&path).unwrap();
     let reference = Arc::new(named("sharp-turn", Vec3::new(0.0, 0.0, 10.0), 0.02, 0.6).unwrap());
     (robot, TrackingController::Policy(Arc::new(policy)), task, reference)

@@ -6,6 +6,8 @@ use std::path::Path;
 use anyhow::{Result, bail};
 use flapper_sim::RobotModel;
 
+use crate::flag_values::count;
+
 pub fn bench_command(
     robot: &RobotModel,
     blocks: usize,
@@ -118,19 +120,19 @@ pub fn bench_command(
 #[derive(clap::Args)]
 pub struct BenchArgs {
     /// Number of timed blocks (the median over blocks is reported).
-    #[arg(long, default_value_t = 21)]
+    #[arg(long, default_value_t = 21, value_parser = count, allow_negative_numbers = true)]
     pub blocks: usize,
     /// MuJoCo steps per block.
-    #[arg(long, default_value_t = 5000)]
+    #[arg(long, default_value_t = 5000, value_parser = count, allow_negative_numbers = true)]
     pub steps: usize,
     /// Also time this many vectorized environments (0 = skip).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = count, allow_negative_numbers = true)]
     pub envs: usize,
     /// Worker threads for the environments (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = count, allow_negative_numbers = true)]
     pub threads: usize,
     /// Also time this many PPO iterations end to end on the flight task (0 = skip).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = count, allow_negative_numbers = true)]
     pub train_iterations: usize,
 }
 

@@ -7,6 +7,8 @@ use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
 use flapper_curriculum::{CurriculumConfig, CurriculumRequest, Progress, run_curriculum};
 
+use crate::flag_values::seed;
+
 /// The shipped curriculum, relative to the repository (the default `--config`).
 const SHIPPED_CONFIG: &str = "configs/curriculum.toml";
 
@@ -20,11 +22,11 @@ pub struct CurriculumArgs {
     #[arg(long, value_name = "TOML", default_value = SHIPPED_CONFIG)]
     config: PathBuf,
     /// Replaces the config's seed (stage k trains with seed * 100 + k).
-    #[arg(long)]
+    #[arg(long, value_parser = seed, allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Stop after this stage (1-based); run again without it to go on.
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..=100))]
-    until_stage: Option<u64>,
+    #[arg(long, value_name = "K", value_parser = 1..=100, allow_negative_numbers = true)]
+    until_stage: Option<i64>,
 }
 
 pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {

@@ -14,6 +14,8 @@ use flapper_eval::tracking_report::{
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 
+use crate::flag_values::{count, seed};
+
 /// What `flapper eval` flies, checked and borrowed from [`EvalArgs`].
 pub struct EvalRequest<'a> {
     pub policy: Option<&'a Path>,
@@ -117,10 +119,10 @@ pub struct EvalArgs {
     #[arg(long, default_value = "longitudinal")]
     pub reference: String,
     /// Episodes, each from its own randomized start.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = count, allow_negative_numbers = true)]
     pub episodes: usize,
     /// Seed of the randomized starts.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Output folder (created if needed): policy/ and scripted/ subfolders and summary.csv.
     #[arg(long, default_value = "run/eval")]

@@ -11,6 +11,7 @@ mod bench;
 mod curriculum;
 mod eval;
 mod export_policy;
+mod flag_values;
 mod fly;
 mod modes;
 mod output_dir;

@@ -63,7 +63,7 @@ pub struct PhaseArgs {
     #[arg(long, value_name = "FILE")]
     pub policy: PathBuf,
     /// Forward speed of the cruise and the climb (the paper: 3 m/s).
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
     pub speed_mps: f64,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/phase")]

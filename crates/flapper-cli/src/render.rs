@@ -4,6 +4,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
+use crate::flag_values::seed;
+
 /// `flapper render`'s options.
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -14,7 +16,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "aerobatic")]
     pub reference: String,
     /// Seed of the randomized start.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/render")]

@@ -6,6 +6,8 @@ use anyhow::Result;
 use flapper_report::{ReportSettings, generate, render_flight, step_count};
 use flapper_sim::RobotModel;
 
+use crate::flag_values::{count, seed};
+
 pub fn report_command(robot: &RobotModel, settings: &ReportSettings, out: &Path) -> Result<()> {
     crate::output_dir::prepare_output_dir(out)?;
     println!(
@@ -47,13 +49,13 @@ pub struct ReportArgs {
     #[arg(long, value_name = "FILE", default_value = flapper_report::FINAL_POLICY)]
     pub policy: PathBuf,
     /// Randomized starts per named reference.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = count, allow_negative_numbers = true)]
     pub episodes: usize,
     /// Episodes per setting of the robustness sweeps (fluid coefficients, winds, Table III).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = count, allow_negative_numbers = true)]
     pub robustness_episodes: usize,
     /// Seed of the randomized starts and the drawn dynamics.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Skip the rendered snapshots and the video (everything else is written).
     #[arg(long)]

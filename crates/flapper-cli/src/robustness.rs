@@ -10,6 +10,8 @@ use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::TrackingController;
 use flapper_sim::RobotModel;
 
+use crate::flag_values::{count, seed};
+
 /// What `flapper robustness` runs, borrowed from [`RobustnessArgs`].
 pub struct RobustnessRequest<'a> {
     pub policy: &'a Path,
@@ -179,17 +181,17 @@ pub struct RobustnessArgs {
     #[arg(long, default_value = "longitudinal")]
     pub reference: String,
     /// Episodes per setting, each from its own randomized start.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = count, allow_negative_numbers = true)]
     pub episodes: usize,
     /// Seed of the starts and of the drawn dynamics.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Which sweeps to run (comma-separated): fluid, wind, table3, envelope.
     #[arg(long, value_delimiter = ',', default_value = "fluid,wind,table3,envelope")]
     pub sweeps: Vec<String>,
     /// Randomization ranges r of the fluid sweep (comma-separated; coefficients x[1 - r, 1 + r]).
     /// Default: the paper's 0, 0.1, 0.2, 0.3, 0.4, 0.5.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub ranges: Option<Vec<f64>>,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/robustness")]

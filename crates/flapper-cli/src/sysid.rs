@@ -9,6 +9,8 @@ use flapper_analysis::sysid::{AxisModel, SysidSettings, fly_records, identify, w
 use flapper_eval::load_flight_policy;
 use flapper_sim::RobotModel;
 
+use crate::flag_values::{count, seed};
+
 fn roots(pairs: &[[f64; 2]]) -> String {
     pairs
         .iter()
@@ -110,19 +112,20 @@ pub struct SysidArgs {
     #[arg(long, value_name = "FILE")]
     pub policy: PathBuf,
     /// Seed of the perturbations' phases (identification and validation records differ).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// RMS of the target perturbation on each axis (m).
-    #[arg(long, default_value_t = 0.15)]
+    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
     pub amplitude_m: f64,
     /// Take as input the desired position this far ahead (s, up to the 0.6 s the policy sees
     /// ahead; 0 is the paper's input, the current desired position). Default: per axis, the lead
     /// whose model best predicts the identification records.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub input_lead_s: Option<f64>,
     /// Periods of 20 s flown after the first and averaged into one: more average out more of the flight
     /// that does not follow the input, and take longer (a record lasts 20 s x (1 + this)).
     #[arg(long, default_value_t = SysidSettings::default().averaged_periods)]
+    #[arg(value_parser = count, allow_negative_numbers = true)]
     pub averaged_periods: usize,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/sysid")]

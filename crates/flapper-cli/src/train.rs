@@ -11,6 +11,8 @@ use flapper_train::TrainConfig;
 use flapper_train::run::{RunError, flight_trainer, saved_config, solve_inverted_pendulum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::flag_values::{count, seed};
+
 /// Command-line values that replace the config's.
 pub struct Overrides {
     pub iterations: Option<usize>,
@@ -210,7 +212,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "TOML")]
     pub config: Option<PathBuf>,
     /// Curriculum stage 1-4 (replaces the config's task.stage).
-    #[arg(long)]
+    #[arg(long, value_parser = 1..=4, allow_negative_numbers = true)]
     pub stage: Option<i64>,
     /// Run folder (created; must not hold a run unless --resume).
     #[arg(long)]
@@ -222,13 +224,13 @@ pub struct TrainArgs {
     #[arg(long, value_name = "FILE")]
     pub init_from: Option<PathBuf>,
     /// Number of PPO iterations (replaces runner.iterations; with --resume, raises the target).
-    #[arg(long)]
+    #[arg(long, value_parser = count, allow_negative_numbers = true)]
     pub iterations: Option<usize>,
     /// Random seed (replaces runner.seed).
-    #[arg(long)]
+    #[arg(long, value_parser = seed, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Parallel environments (replaces runner.envs).
-    #[arg(long)]
+    #[arg(long, value_parser = count, allow_negative_numbers = true)]
     pub envs: Option<usize>,
 }
 

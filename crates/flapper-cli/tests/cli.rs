@@ -290,7 +290,6 @@ fn train_rejects_bad_configs_and_checkpoints_with_one_line() {
         &flapper(&["train", "--config", range.to_str().unwrap(), "--out", out.to_str().unwrap()]),
         "ppo.lambda",
     );
-    assert_one_line_error(&flapper(&["train", "--stage", "7", "--out", out.to_str().unwrap()]), "stage 7");
     let action = dir.join("action.toml");
     std::fs::write(&action, "[task.control]\naction_mode = \"flap_oscillator\"\nflap_amplitude_max = 9.0\n").unwrap();
     assert_one_line_error(
@@ -351,10 +350,48 @@ fn argument_errors_show_clap_s_whole_message_and_eval_needs_a_policy() {
     assert_one_line_error(&flapper(&["eval", "--episodes", "1"]), "--baseline-only");
 }
 
-fn shipped_policy(stage: &str) -> String {
+/// Every numeric flag refuses a negative number naming the flag: a count or a seed as clap's invalid
+/// value (clap would otherwise take `-1` for an unknown flag and name none), the others by their own
+/// range check, before any work. Not here: `fly --tail-deg`, whose negative angles are valid.
+#[test]
+fn a_negative_number_is_refused_naming_its_flag() {
+    let out = scratch("negative");
+    let (o, policy) = (out.to_str().unwrap(), shipped_policy("final"));
+    let p = policy.as_str();
+    let flags: &[(&[&str], &[&str])] = &[
+        (&["eval", "--policy", p, "--out", o], &["--episodes", "--seed"]),
+        (&["train", "--out", o], &["--stage", "--iterations", "--seed", "--envs"]),
+        (&["curriculum", "--out", o], &["--seed", "--until-stage"]),
+        (&["bench"], &["--blocks", "--steps", "--envs", "--threads", "--train-iterations"]),
+        (&["pendulum", "--out", o], &["--seeds", "--max-iterations"]),
+        (&["fly", "--out", o], &["--seconds"]),
+        (&["render", "--policy", p, "--out", o], &["--seed"]),
+        (&["report", "--out", o], &["--episodes", "--robustness-episodes", "--seed"]),
+        (&["robustness", "--policy", p, "--out", o], &["--episodes", "--seed", "--ranges"]),
+        (&["sysid", "--policy", p, "--out", o], &["--seed", "--amplitude-m", "--input-lead-s", "--averaged-periods"]),
+        (&["phase", "--policy", p, "--out", o], &["--speed-mps"]),
+    ];
+    for (command, flags) in flags {
+        for flag in *flags {
+            let args = [command, &[*flag, "-1"][..]].concat();
+            let output = flapper(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let first = stderr.lines().next().unwrap_or_default();
+            assert!(!output.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
+            assert!(first.starts_with("error: ") && first.contains("-1"), "{args:?}: {stderr}");
+            assert!(first.contains(&format!("{flag} ")) || first.contains(&format!("{flag}:")), "{args:?}: {stderr}");
+        }
+    }
+    assert!(std::fs::read_dir(&out).unwrap().next().is_none(), "a refused command writes nothing");
+    let stage = flapper(&["train", "--stage", "7", "--out", o]);
+    let stderr = String::from_utf8_lossy(&stage.stderr);
+    assert!(stderr.starts_with("error: invalid value '7' for '--stage <STAGE>': 7 is not in 1..=4"), "{stderr}");
+}
+
+fn shipped_policy(folder: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../policies")
-        .join(stage)
+        .join(folder)
         .join("policy.safetensors")
         .display()
         .to_string()
@@ -363,7 +400,7 @@ fn shipped_policy(stage: &str) -> String {
 #[test]
 fn sysid_phase_and_modes_analyse_the_shipped_stage_2_policy() {
     let out = scratch("analysis");
-    let policy = shipped_policy("stage2");
+    let policy = shipped_policy("history/stage2");
     let sysid = out.join("sysid");
     let output = flapper(&["sysid", "--policy", &policy, "--averaged-periods", "2", "--out", sysid.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
@@ -411,7 +448,7 @@ fn analysis_commands_reject_bad_input_with_one_line() {
         &flapper(&["sysid", "--policy", "/no/such/policy.safetensors", "--out", o]),
         "/no/such/policy.safetensors",
     );
-    let policy = shipped_policy("stage2");
+    let policy = shipped_policy("history/stage2");
     assert_one_line_error(&flapper(&["sysid", "--policy", &policy, "--amplitude-m", "5", "--out", o]), "--amplitude-m");
     assert_one_line_error(
         &flapper(&["sysid", "--policy", &policy, "--input-lead-s", "2", "--out", o]),
@@ -434,7 +471,7 @@ fn analysis_commands_reject_bad_input_with_one_line() {
 fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
     let out = scratch("robustness");
     let o = out.to_str().unwrap();
-    let policy = shipped_policy("stage3");
+    let policy = shipped_policy("history/stage3");
     let args = ["robustness", "--policy", &policy, "--reference", "sharp-turn", "--episodes", "2", "--seed", "5"];
     let output = flapper(&[&args[..], &["--sweeps", "fluid,wind", "--ranges", "0,0.5", "--out", o]].concat());
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
@@ -496,7 +533,7 @@ fn eval_writes_what_the_policy_saw_and_did() {
     // action is the "previous action" of the next row's newest frame (clipped to [-1, 1]), and the
     // first row's previous action is the reset's (every joint at 0: action 0).
     let out = scratch("observations");
-    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/stage2/policy.safetensors");
+    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/history/stage2/policy.safetensors");
     let output = flapper(&[
         "eval",
         "--policy",

@@ -1,7 +1,8 @@
 //! The curriculum in one TOML file (`configs/curriculum.toml`): a seed, the `[runner]` and `[ppo]`
 //! settings every stage starts from, and one `[[stages]]` entry per stage with its task, budget,
 //! validation set and gate. Each stage becomes an ordinary `flapper train` config ([`TrainConfig`]), so
-//! every key a training config takes is available here with the same meaning and the same checks.
+//! every key a training config takes is available here with the same meaning and the same checks. A
+//! file may build on another and hold only what differs (`extends`, [`crate::overlay`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -10,10 +11,14 @@ use flapper_task::config::RandomizationConfig;
 use flapper_train::{TrainConfig, TrainConfigError};
 use serde::{Deserialize, Serialize};
 
+use crate::overlay::{self, OverlayError};
+
 #[derive(Debug, thiserror::Error)]
 pub enum CurriculumConfigError {
     #[error("cannot read curriculum config '{path}'")]
     Read { path: String, source: std::io::Error },
+    #[error(transparent)]
+    Overlay(#[from] OverlayError),
     #[error("curriculum config '{origin}': {message}")]
     Parse { origin: String, message: String },
     #[error("curriculum config '{origin}', stage {stage}: {source}")]
@@ -133,9 +138,8 @@ impl ValidationConfig {
     /// The names of the entries the named references make: each of `references`, then
     /// `<reference>~<name>` for each randomized one (the procedural ones are drawn later).
     pub fn entry_names(&self) -> Vec<String> {
-        let randomized = self.randomized.iter().flat_map(|r| {
-            r.references.iter().map(|reference| crate::validation::randomized_entry_name(reference, &r.name))
-        });
+        let randomized =
+            self.randomized.iter().flat_map(|r| r.references.iter().map(|reference| r.entry_name(reference)));
         self.references.iter().cloned().chain(randomized).collect()
     }
 
@@ -145,7 +149,15 @@ impl ValidationConfig {
     }
 }
 
+/// Between a reference's name and its randomization's in a randomized entry: `lateral~table3`.
+pub const RANDOMIZED_SEPARATOR: char = '~';
+
 impl RandomizedValidation {
+    /// The entry `reference` makes flown under this randomization: `lateral~table3`.
+    pub fn entry_name(&self, reference: &str) -> String {
+        format!("{reference}{RANDOMIZED_SEPARATOR}{}", self.name)
+    }
+
     /// The randomization as flown (switched on).
     pub fn flown_randomization(&self) -> RandomizationConfig {
         RandomizationConfig { enabled: true, ..self.randomization.clone() }
@@ -215,17 +227,39 @@ impl Gate {
 }
 
 impl CurriculumConfig {
+    /// Reads, resolves (a file that extends another is laid over it) and checks a curriculum file.
     pub fn load(path: &Path) -> Result<Self, CurriculumConfigError> {
+        let origin = path.display().to_string();
         let text = std::fs::read_to_string(path)
-            .map_err(|source| CurriculumConfigError::Read { path: path.display().to_string(), source })?;
-        Self::from_toml(&text, &path.display().to_string())
+            .map_err(|source| CurriculumConfigError::Read { path: origin.clone(), source })?;
+        let file: toml::Table = toml::from_str(&text).map_err(|e: toml::de::Error| CurriculumConfigError::Parse {
+            origin: origin.clone(),
+            message: e.to_string(),
+        })?;
+        if !overlay::extends_another(&file) {
+            // Parsed again from the text, so that a mistake is shown at its line.
+            return Self::from_toml(&text, &origin);
+        }
+        let resolved = overlay::resolve(path, file)?;
+        let config = Self::deserialize(resolved)
+            .map_err(|e| CurriculumConfigError::Parse { origin: origin.clone(), message: e.to_string() })?;
+        config.checked(&origin)
     }
 
-    /// Parses and checks the whole curriculum: every stage's training config is built once here, so
-    /// a mistake in stage 4 is refused before stage 1 trains.
+    /// Parses and checks a whole curriculum (one that extends no other file).
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, CurriculumConfigError> {
+        let config: Self = toml::from_str(text).map_err(|e: toml::de::Error| CurriculumConfigError::Parse {
+            origin: origin.to_owned(),
+            message: e.to_string(),
+        })?;
+        config.checked(origin)
+    }
+
+    /// Checks the whole curriculum: every stage's training config is built once here, so a mistake in
+    /// stage 4 is refused before stage 1 trains.
+    fn checked(self, origin: &str) -> Result<Self, CurriculumConfigError> {
+        let config = self;
         let parse = |message: String| CurriculumConfigError::Parse { origin: origin.to_owned(), message };
-        let config: Self = toml::from_str(text).map_err(|e: toml::de::Error| parse(e.to_string()))?;
         if config.stages.is_empty() {
             return Err(parse("needs at least one [[stages]] entry".into()));
         }
@@ -459,47 +493,133 @@ task = { stage = 2 }
     }
 
     #[test]
-    fn the_flight_modes_recipe_is_the_shipped_curriculum_and_one_stage_more() {
-        // configs/curriculum-flight-modes.toml: the experiment of docs/experiments.md ("The flight-modes
-        // stage in the curriculum"); its first four stages must not drift from the shipped ones.
-        let (c, four) = (shipped("curriculum-flight-modes.toml"), shipped("curriculum.toml"));
-        assert_eq!(task_stages(&c), [1, 2, 3, 4, 4]);
-        assert_eq!(
-            (c.seed, c.max_env_steps, &c.runner, &c.ppo),
-            (four.seed, four.max_env_steps, &four.runner, &four.ppo)
-        );
-        assert!(c.stages[..4] == four.stages[..], "stages 1-4 differ from configs/curriculum.toml's");
-        let flight_modes = c.stage_train_config(5).unwrap();
-        assert!(flight_modes.ppo.smoothness_coef > 0.0 && flight_modes.task.reference.glide_probability > 0.0);
-        check_budget(&c, "curriculum-flight-modes.toml");
-    }
+    fn the_experiments_build_on_the_shipped_curriculum_and_read() {
+        // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
+        // each one's section): stages 1-4 are the shipped ones by construction, and each must still read
+        // and check after any change to the curriculum it builds on.
+        let four = shipped("curriculum.toml");
+        let flight_modes = shipped("experiments/curriculum-flight-modes.toml");
+        assert_eq!(task_stages(&flight_modes), [1, 2, 3, 4, 4]);
+        assert!(flight_modes.stages[..4] == four.stages[..] && flight_modes.max_env_steps == four.max_env_steps);
+        let stage = flight_modes.stage_train_config(5).unwrap();
+        assert!(stage.ppo.smoothness_coef > 0.0 && stage.task.reference.glide_probability > 0.0);
+        assert!(flight_modes.stages[4].gate.identification_required, "the flight modes must keep the identified loop");
+        check_budget(&flight_modes, "curriculum-flight-modes.toml");
 
-    #[test]
-    fn the_slow_flight_recipe_is_the_shipped_curriculum_and_two_stages_more() {
-        // configs/curriculum-slow-flight.toml: the experiment of docs/experiments.md ("A slow-flight stage
-        // before the flight modes", L2 and F2); its first four stages must not drift from the shipped ones.
-        let (c, four) = (shipped("curriculum-slow-flight.toml"), shipped("curriculum.toml"));
-        assert_eq!(task_stages(&c), [1, 2, 3, 4, 4, 4]);
-        assert_eq!(
-            (c.seed, c.max_env_steps, &c.runner, &c.ppo),
-            (four.seed, four.max_env_steps, &four.runner, &four.ppo)
-        );
-        assert!(c.stages[..4] == four.stages[..], "stages 1-4 differ from configs/curriculum.toml's");
-        let (slow, priced) = (c.stage_train_config(5).unwrap(), c.stage_train_config(6).unwrap());
-        assert!(slow.task.reference.level_probability > 0.0 && priced.task.reference.level_probability > 0.0);
+        let slow = shipped("experiments/curriculum-slow-flight.toml");
+        assert_eq!(task_stages(&slow), [1, 2, 3, 4, 4, 4]);
+        let (level, priced) = (slow.stage_train_config(5).unwrap(), slow.stage_train_config(6).unwrap());
+        assert!(level.task.reference.level_probability > 0.0 && priced.task.reference.level_probability > 0.0);
         assert_eq!(priced.ppo.smoothness_coef, 0.0, "the recipe without the smoothness term");
-        check_budget(&c, "curriculum-slow-flight.toml");
+        assert_eq!(slow.stages[4].gate, Gate { min_iterations: 400, ..Gate::completing(50.0) }, "written whole");
+        check_budget(&slow, "curriculum-slow-flight.toml");
+
+        let oscillator = shipped("experiments/curriculum-oscillator.toml");
+        assert_eq!(task_stages(&oscillator), [1, 2, 3, 3, 4]);
+        let smoothness: Vec<f32> =
+            (1..=5).map(|k| oscillator.stage_train_config(k).unwrap().ppo.smoothness_coef).collect();
+        assert_eq!(smoothness, [0.3, 0.3, 0.0, 0.0, 0.03]);
+        let restarted = oscillator.stage_train_config(4).unwrap();
+        assert_eq!(restarted.runner.init_from_noise_std, Some(0.4), "the noise restarted");
+        assert_eq!(restarted.task.control.action_mode, flapper_task::config::ActionMode::FlapOscillator);
+        assert_eq!(oscillator.stages[3].validation, oscillator.stages[2].validation, "stage 3's, copied");
+    }
+
+    /// Writes `files` (name, text) into a fresh folder and returns it.
+    fn folder(name: &str, files: &[(&str, &str)]) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("flapper-extends-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("experiments")).unwrap();
+        for (file, text) in files {
+            std::fs::write(dir.join(file), text).unwrap();
+        }
+        dir
     }
 
     #[test]
-    fn the_oscillator_recipe_reads_with_stage_3_in_two_parts() {
-        // configs/curriculum-oscillator.toml: the flight-modes experiment of docs/experiments.md (OSC14, OSC15).
-        let c = shipped("curriculum-oscillator.toml");
-        assert_eq!(task_stages(&c), [1, 2, 3, 3, 4]);
-        let smoothness: Vec<f32> =
-            (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().ppo.smoothness_coef).collect();
-        assert_eq!(smoothness, [0.3, 0.3, 0.0, 0.0, 0.03]);
-        assert_eq!(c.stage_train_config(4).unwrap().runner.init_from_noise_std, Some(0.4), "the noise restarted");
+    fn a_file_extending_another_changes_appends_copies_and_inserts_stages_by_name() {
+        let overlay = r#"
+extends = "../base.toml"
+seed = 5
+runner = { threads = 2 }
+[[stages]]
+modify = "climb and dive"
+max_iterations = 6
+task.reward = { energy_scale_w = 15.0 }
+[[stages]]
+name = "first again"
+from = "cruise"
+after = "cruise"
+validation = { references = ["lateral"], episodes = 1 }
+[[stages]]
+name = "last"
+validate_every = 1
+max_iterations = 1
+validation = { references = ["loop"], episodes = 1 }
+gate = { completed_percent = 0 }
+task = { stage = 3 }
+"#;
+        let dir = folder("merge", &[("base.toml", TINY), ("experiments/more.toml", overlay)]);
+        let c = CurriculumConfig::load(&dir.join("experiments/more.toml")).unwrap();
+        let base = CurriculumConfig::from_toml(TINY, "base").unwrap();
+        let names: Vec<&str> = c.stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["cruise", "first again", "climb and dive", "last"]);
+        assert_eq!(c.seed, 5, "a top-level key replaced");
+        let first = c.stage_train_config(1).unwrap();
+        assert_eq!((first.runner.envs, first.runner.threads), (4, 2), "[runner] merged key by key");
+        let copy = &c.stages[1];
+        assert_eq!(copy.validation.references, ["lateral"], "a list replaced whole");
+        assert_eq!((copy.max_iterations, &copy.gate, &copy.task), (4, &base.stages[0].gate, &base.stages[0].task));
+        let changed = &c.stages[2];
+        assert_eq!((changed.max_iterations, changed.validate_every), (6, 1), "changed in place, the rest kept");
+        let reward = c.stage_train_config(3).unwrap().task.reward;
+        assert_eq!(reward.energy_scale_w, 15.0);
+        assert_eq!(c.stages[3].task.get("stage").and_then(toml::Value::as_integer), Some(3));
+        // A file may extend one that extends another; what a run saves is the whole curriculum.
+        std::fs::write(dir.join("experiments/again.toml"), "extends = \"more.toml\"\nseed = 6\n").unwrap();
+        let again = CurriculumConfig::load(&dir.join("experiments/again.toml")).unwrap();
+        assert_eq!(again, CurriculumConfig { seed: 6, ..c.clone() });
+        assert!(!again.to_toml().contains("extends"));
+        assert_eq!(CurriculumConfig::from_toml(&again.to_toml(), "saved").unwrap(), again);
+    }
+
+    #[test]
+    fn a_missing_base_or_stage_is_refused_in_one_line_naming_the_file_and_what_is_missing() {
+        let refused = |name: &str, overlay: &str| {
+            let dir = folder(name, &[("base.toml", TINY), ("experiments/x.toml", overlay)]);
+            let message = CurriculumConfig::load(&dir.join("experiments/x.toml")).unwrap_err().to_string();
+            assert!(message.contains("x.toml") && !message.contains('\n'), "{message}");
+            message
+        };
+        let e = refused("missing", "extends = \"../nowhere.toml\"\n");
+        assert!(e.contains("extends '../nowhere.toml'") && e.contains("cannot be read"), "{e}");
+        for key in ["modify", "from", "after"] {
+            let entry = match key {
+                "modify" => "modify = \"crusie\"".to_owned(),
+                _ => format!("name = \"new\"\n{key} = \"crusie\""),
+            };
+            let e = refused(key, &format!("extends = \"../base.toml\"\n[[stages]]\n{entry}\n"));
+            assert!(e.contains(&format!("{key} = 'crusie' names no stage of '../base.toml'")), "{e}");
+            assert!(e.contains("'cruise', 'climb and dive'"), "the stages there are listed: {e}");
+        }
+        let e = refused("twice", "extends = \"../base.toml\"\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n");
+        assert!(e.contains("'cruise'") && e.contains("modify = 'cruise'"), "{e}");
+        let e = refused("nameless", "extends = \"../base.toml\"\n[[stages]]\nmax_iterations = 2\n");
+        assert!(e.contains("entry 1") && e.contains("modify") && e.contains("name"), "{e}");
+        let e =
+            refused("in-place", "extends = \"../base.toml\"\n[[stages]]\nmodify = \"cruise\"\nafter = \"cruise\"\n");
+        assert!(e.contains("in place"), "{e}");
+        let dir = folder(
+            "bad-base",
+            &[("base.toml", "stages = 5\n"), ("experiments/x.toml", "extends = \"../base.toml\"\n")],
+        );
+        let e = CurriculumConfig::load(&dir.join("experiments/x.toml")).unwrap_err().to_string();
+        assert!(e.contains("base.toml': stages must be a list of [[stages]] tables, got 5"), "{e}");
+        let e = refused("circle", "extends = \"x.toml\"\n");
+        assert!(e.contains("extends 'x.toml', which extends it again"), "{e}");
+        let e =
+            refused("checked", "extends = \"../base.toml\"\n[[stages]]\nmodify = \"cruise\"\nvalidate_every = 50\n");
+        assert!(e.contains("stage 1 ('cruise')") && e.contains("validate_every (50)"), "the result is checked: {e}");
     }
 
     #[test]

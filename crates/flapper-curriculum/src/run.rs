@@ -14,60 +14,23 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use flapper_ppo::checkpoint::{self, CheckpointError};
+use flapper_ppo::checkpoint;
 use flapper_ppo::run_folder::{checkpoint_path, saved_checkpoints};
 use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
 
 use crate::config::{CurriculumConfig, Gate, StageConfig};
+use crate::error::CurriculumError;
 use crate::figure::write_curriculum_figure;
 use crate::glide::glide_fraction;
 use crate::identification::identification_fit_percent;
 use crate::selection::{
-    GateColumns, Selection, SelectionError, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_validation_time_s, stage_wall_time_s,
+    GateColumns, Selection, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_validation_time_s,
+    stage_wall_time_s,
 };
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
-
-#[derive(Debug, thiserror::Error)]
-pub enum CurriculumError {
-    #[error("'{0}' holds files that are not a curriculum run (no curriculum.toml); choose a new or empty folder")]
-    NotACurriculum(PathBuf),
-    #[error(
-        "'{dir}' holds a curriculum started with other settings ({what} differs from its curriculum.toml); continue it with the same settings or choose another folder"
-    )]
-    OtherSettings { dir: PathBuf, what: &'static str },
-    #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
-    Busy(PathBuf),
-    #[error(
-        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}. Its runs are in '{dir}'",
-        .stopped.stage, .stopped.name, .stopped.gate, .stopped.iterations
-    )]
-    GateMissed {
-        /// The stage, its gate, what it spent and the best score it reached (also `stopped` in `summary.json`).
-        stopped: Box<StoppedStage>,
-        /// The best checkpoint's iteration and score, and the identification of those identified.
-        best: String,
-        dir: PathBuf,
-    },
-    #[error(
-        "stage {stage} ('{name}') cannot start: the curriculum's max_env_steps ({budget}) leaves {left} environment steps after the stages before it, {iterations} iterations, and the stage needs at least {needed} (one validation interval, or its gate's min_iterations); raise max_env_steps or lower an earlier stage's max_iterations"
-    )]
-    BudgetSpent { stage: usize, name: String, budget: u64, left: u64, iterations: usize, needed: usize },
-    #[error(transparent)]
-    Run(#[from] RunError),
-    #[error(transparent)]
-    Train(#[from] flapper_ppo::TrainError),
-    #[error(transparent)]
-    Validation(#[from] ValidationError),
-    #[error(transparent)]
-    Selection(#[from] SelectionError),
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
-    #[error("'{path}': {message}")]
-    File { path: PathBuf, message: String },
-}
 
 /// What the caller chose.
 pub struct CurriculumRequest<'a> {

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::config::CurriculumConfig;
-use crate::run::CurriculumError;
+use crate::error::CurriculumError;
 use crate::selection::{StageOutcome, StoppedStage};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

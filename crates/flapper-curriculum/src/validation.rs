@@ -18,7 +18,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::config::{Gate, ValidationConfig};
+use crate::config::{Gate, RANDOMIZED_SEPARATOR, ValidationConfig};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ValidationError {
@@ -36,14 +36,6 @@ pub enum ValidationError {
 
 /// How the drawn references of a validation set are named: `procedural-1`, `procedural-2`, ...
 pub const PROCEDURAL_PREFIX: &str = "procedural-";
-
-/// Between a reference's name and its randomization's in a randomized entry: `lateral~table3`.
-pub const RANDOMIZED_SEPARATOR: char = '~';
-
-/// The name of `reference` flown under the randomization named `setting`: `lateral~table3`.
-pub fn randomized_entry_name(reference: &str, setting: &str) -> String {
-    format!("{reference}{RANDOMIZED_SEPARATOR}{setting}")
-}
 
 /// One line of a validation set: a reference, flown from `episodes` starts, nominal or randomized.
 pub struct ValidationEntry {
@@ -78,7 +70,7 @@ impl ValidationSet {
             for name in &setting.references {
                 let reference = Arc::new(resolve(name, dt_s, lookahead)?);
                 randomized.push(ValidationEntry {
-                    name: randomized_entry_name(reference.name(), &setting.name),
+                    name: setting.entry_name(reference.name()),
                     reference,
                     episodes: setting.episodes,
                     randomization: Some(setting.flown_randomization()),

@@ -13,9 +13,9 @@ fn shipped(name: &str) -> PathBuf {
 #[test]
 fn the_glide_bar_tells_the_gliding_candidate_from_the_flapping_final_controller() {
     let robot = RobotModel::flapper().unwrap();
-    // `flapper modes` on both (policies/smooth/README.md and README.md): 0.74 and 0.00.
-    let smooth = glide_fraction(&robot, &shipped("smooth")).unwrap();
+    // `flapper modes` on both (policies/experiments/smooth/README.md and README.md): 0.74 and 0.00.
+    let smooth = glide_fraction(&robot, &shipped("experiments/smooth")).unwrap();
     let final_controller = glide_fraction(&robot, &shipped("final")).unwrap();
-    assert!(smooth >= 0.5, "policies/smooth glides {smooth:.2} of the glide segment");
+    assert!(smooth >= 0.5, "policies/experiments/smooth glides {smooth:.2} of the glide segment");
     assert!(final_controller < 0.1, "the final controller glides {final_controller:.2} of it");
 }

@@ -91,7 +91,7 @@ fn the_exported_c_gives_the_rust_actions_bit_for_bit_on_a_real_flight() {
 #[test]
 fn the_export_refuses_an_existing_file_and_a_name_without_c() {
     let robot = RobotModel::flapper().unwrap();
-    let deployable = DeployablePolicy::load(&shipped("policies/stage1/policy.safetensors"), &robot).unwrap();
+    let deployable = DeployablePolicy::load(&shipped("policies/history/stage1/policy.safetensors"), &robot).unwrap();
     let dir = scratch("refuse");
     std::fs::write(dir.join("policy.h"), "kept").unwrap();
     let error = write_c_source(&deployable, &dir.join("policy.c")).unwrap_err().to_string();

@@ -4,7 +4,7 @@
 //!
 //!     cargo run --release -p flapper-eval --example inference_golden -- POLICY OUT
 //!
-//! (the test's data: `policies/stage4/policy.safetensors crates/flapper-eval/tests/data/inference_golden.safetensors`).
+//! (the test's data: `policies/history/stage4/policy.safetensors crates/flapper-eval/tests/data/inference_golden.safetensors`).
 //! Never edit the output by hand: it is what makes "the same bits on every CPU" checkable.
 
 use std::collections::HashMap;

@@ -189,7 +189,7 @@ pub fn evaluate_tracking_randomized(
 /// policy it is compared with was trained on.
 fn controller_task(controller: &TrackingController, mut config: TaskConfig) -> TaskConfig {
     if let TrackingController::Scripted(_) = controller {
-        config.control.action_mode = flapper_task::action::ActionMode::JointTargets;
+        config.control.action_mode = flapper_task::config::ActionMode::JointTargets;
     }
     config
 }

@@ -97,7 +97,7 @@ fn the_scripted_gait_flies_the_same_beside_a_policy_trained_on_oscillator_action
     let scripted = TrackingController::Scripted(ScriptedGaitConfig::default());
     let joint_targets = TaskConfig::stage(1).unwrap();
     let mut oscillator = joint_targets.clone();
-    oscillator.control.action_mode = flapper_task::action::ActionMode::FlapOscillator;
+    oscillator.control.action_mode = flapper_task::config::ActionMode::FlapOscillator;
     let fly = |task: &TaskConfig| evaluate_tracking(&robot, &scripted, task, reference.clone(), 2, 3).unwrap();
     let (a, b) = (fly(&joint_targets), fly(&oscillator));
     assert_eq!(a.len(), 2);

@@ -1,8 +1,8 @@
-//! The committed policies still fly: stages 1-2 complete the 30 s cruise reference from the nominal
+//! The committed policies still fly: the hand-chained stages 1-2 (`policies/history/`) complete the 30 s cruise reference from the nominal
 //! start and from most randomized starts, close to the path; stage 3 flies the turns of `lateral` and
 //! the `loop` from randomized starts; the hand-chained stage 4 the aerobatic chain and the sharp turn;
 //! the final controller (`policies/final`, from `flapper curriculum`) the aerobatic chain, the loop
-//! and the lateral turns; the flight-modes candidate (`policies/smooth`) longitudinal on little energy
+//! and the lateral turns; the flight-modes candidate (`policies/experiments/smooth`) longitudinal on little energy
 //! and the aerobatic chain. This guards every later change to the model, the task or the learner (a
 //! change that breaks the learned flight fails here).
 
@@ -15,7 +15,7 @@ use flapper_sim::{RobotModel, Vec3};
 use flapper_task::TaskConfig;
 use flapper_task::reference::named::named;
 
-/// The shipped policy of `stage`, its task, and the named `reference` with the policy's lookahead.
+/// The shipped policy in `policies/<stage>` (`final`, `history/stage3`, ...), its task, and the named `reference` with the policy's lookahead.
 fn shipped(
     stage: &str,
     reference: &str,
@@ -75,18 +75,18 @@ fn check_flies_the_cruise(stage: &str) {
 
 #[test]
 fn the_shipped_stage_1_policy_still_flies_the_cruise() {
-    check_flies_the_cruise("stage1");
+    check_flies_the_cruise("history/stage1");
 }
 
 #[test]
 fn the_shipped_stage_2_policy_still_flies_the_cruise() {
-    check_flies_the_cruise("stage2");
+    check_flies_the_cruise("history/stage2");
 }
 
 #[test]
 fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
-    check_tracks("stage3", "lateral", 4, 4, 0.5);
-    let results = check_tracks("stage3", "loop", 4, 4, 1.0);
+    check_tracks("history/stage3", "lateral", 4, 4, 0.5);
+    let results = check_tracks("history/stage3", "loop", 4, 4, 1.0);
     // Through the loop and out of it: upside down on the way, back within 1 m of the path after it.
     for r in &results {
         assert!(r.went_inverted(), "a loop goes over the top");
@@ -97,8 +97,8 @@ fn the_shipped_stage_3_policy_flies_the_lateral_turns_and_the_loop() {
 #[test]
 fn the_shipped_stage_4_policy_flies_the_aerobatic_chain_and_the_sharp_turn() {
     // 99/100 on `aerobatic` and 100/100 on `sharp-turn` (seed 11, 100 episodes).
-    check_flies_the_aerobatic_chain("stage4");
-    check_tracks("stage4", "sharp-turn", 4, 4, 1.0);
+    check_flies_the_aerobatic_chain("history/stage4");
+    check_tracks("history/stage4", "sharp-turn", 4, 4, 1.0);
 }
 
 #[test]
@@ -111,12 +111,15 @@ fn the_final_controller_flies_the_aerobatic_chain_the_loop_and_the_lateral_turns
 
 #[test]
 fn the_flight_modes_candidate_flies_longitudinal_on_a_third_of_the_final_controllers_energy() {
-    // policies/smooth (configs/stage4-smooth.toml; seed 11, 100 episodes): longitudinal 100/100 at RMS
+    // policies/experiments/smooth (configs/experiments/stage4-smooth.toml; seed 11, 100 episodes): longitudinal 100/100 at RMS
     // 0.299 m and 3.59 J/m (the final controller 13.03, the scripted gait 2.40), the aerobatic chain 98/100.
-    let results = check_tracks("smooth", "longitudinal", 4, 4, 0.5);
+    let results = check_tracks("experiments/smooth", "longitudinal", 4, 4, 0.5);
     for r in &results {
         let energy = r.energy_per_metre_j(0.02);
-        assert!(energy < 4.8, "policies/smooth on longitudinal: {energy:.2} J/m, over twice the scripted gait's");
+        assert!(
+            energy < 4.8,
+            "policies/experiments/smooth on longitudinal: {energy:.2} J/m, over twice the scripted gait's"
+        );
     }
-    check_flies_the_aerobatic_chain("smooth");
+    check_flies_the_aerobatic_chain("experiments/smooth");
 }

@@ -30,6 +30,7 @@ pub mod ppo;
 pub mod run_folder;
 pub mod runner;
 pub mod storage;
+pub mod train_error;
 pub mod training_log;
 pub mod vec_env;
 

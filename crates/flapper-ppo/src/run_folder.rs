@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::checkpoint;
-use crate::runner::TrainError;
+use crate::train_error::TrainError;
 
 /// The files a run writes in its folder besides the checkpoints: a new run refuses a
 /// folder that holds any of them, so it never overwrites a user's own file.

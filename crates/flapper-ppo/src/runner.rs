@@ -10,46 +10,16 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::actor_critic::ActorCritic;
-use crate::checkpoint::{self, CheckpointError, CheckpointKind};
+use crate::checkpoint::{self, CheckpointKind};
 use crate::config::{PpoConfig, RunnerConfig};
-use crate::ppo::{Ppo, UpdateStats};
+use crate::ppo::Ppo;
 use crate::run_folder::RunFolder;
 use crate::training_log;
-use crate::vec_env::{EndReason, EnvError, VecEnv};
+use crate::vec_env::{EndReason, VecEnv};
 
-#[derive(Debug, thiserror::Error)]
-pub enum TrainError {
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
-    #[error("environment: {0}")]
-    Env(EnvError),
-    #[error("'{0}' already holds a training run; resume it, or train into another folder")]
-    RunExists(PathBuf),
-    #[error(
-        "'{dir}' already holds {file}, which a new run would overwrite; give --out a new or empty folder (or move the file)"
-    )]
-    WouldOverwrite { dir: PathBuf, file: &'static str },
-    #[error(
-        "cannot resume: '{path}' {problem}; the checkpoints are intact: restore the file, or move it away to resume with a new log from the checkpoint on"
-    )]
-    DamagedLog { path: PathBuf, problem: String },
-    #[error(
-        "another training process is using '{0}' (it holds the folder's lock file .lock); wait for it to end or train into another folder"
-    )]
-    Busy(PathBuf),
-    #[error("'{0}' has no checkpoint to resume from (checkpoints/iter_*.safetensors)")]
-    NothingToResume(PathBuf),
-    #[error("cannot write '{path}': {message}")]
-    Output { path: PathBuf, message: String },
-    #[error(
-        "'{0}' holds no environment state (written by an older flapper, whose runs restarted their environments at every checkpoint); start a new run from its policy instead"
-    )]
-    NoEnvironmentState(PathBuf),
-    #[error(
-        "the run reached {iterations} iterations already (checkpoint at iteration {done}); raise the iteration count to train further"
-    )]
-    AlreadyDone { iterations: usize, done: usize },
-}
+// The runner's errors and its per-iteration log, where the crate's root re-exports them from.
+pub use crate::train_error::TrainError;
+pub use crate::training_log::IterationLog;
 
 /// How a run begins.
 #[derive(Debug, Clone)]
@@ -60,30 +30,6 @@ pub enum Start {
     Resume,
     /// New run whose policy (networks and normalizer) starts as another run's (curriculum stages).
     InitFrom(PathBuf),
-}
-
-/// One iteration's figures: one CSV row.
-#[derive(Debug, Clone, PartialEq)]
-pub struct IterationLog {
-    /// Iterations completed (1 after the first).
-    pub iteration: usize,
-    pub env_steps: u64,
-    pub wall_time_s: f64,
-    /// Environment steps per second over this iteration.
-    pub steps_per_s: f64,
-    /// Episodes finished in this iteration, their mean return and length, and how they ended
-    /// (counts in the order of the environment's `EndReason::ALL`).
-    pub episodes: usize,
-    pub mean_return: f64,
-    pub mean_length: f64,
-    pub end_counts: Vec<usize>,
-    /// Mean reward per step and mean of each environment diagnostic over the rollout.
-    pub mean_reward: f64,
-    pub diagnostics: Vec<f64>,
-    pub update: UpdateStats,
-    pub env_time_s: f64,
-    pub inference_time_s: f64,
-    pub update_time_s: f64,
 }
 
 pub struct Trainer<E: VecEnv> {

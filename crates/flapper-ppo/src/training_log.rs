@@ -7,7 +7,31 @@ use flapper_files::decimals::{each_fixed, fixed};
 
 use crate::checkpoint;
 use crate::ppo::UpdateStats;
-use crate::runner::{IterationLog, TrainError};
+use crate::train_error::TrainError;
+
+/// One iteration's figures: one CSV row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IterationLog {
+    /// Iterations completed (1 after the first).
+    pub iteration: usize,
+    pub env_steps: u64,
+    pub wall_time_s: f64,
+    /// Environment steps per second over this iteration.
+    pub steps_per_s: f64,
+    /// Episodes finished in this iteration, their mean return and length, and how they ended
+    /// (counts in the order of the environment's `EndReason::ALL`).
+    pub episodes: usize,
+    pub mean_return: f64,
+    pub mean_length: f64,
+    pub end_counts: Vec<usize>,
+    /// Mean reward per step and mean of each environment diagnostic over the rollout.
+    pub mean_reward: f64,
+    pub diagnostics: Vec<f64>,
+    pub update: UpdateStats,
+    pub env_time_s: f64,
+    pub inference_time_s: f64,
+    pub update_time_s: f64,
+}
 
 /// The CSV header: fixed columns, one `end_<reason>` per episode end, the environment's diagnostics,
 /// the update's statistics (with `smoothness` after them when the run weighs it, so that the logs of

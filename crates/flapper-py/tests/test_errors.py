@@ -81,7 +81,7 @@ def test_bad_policies(root, tmp_path):
     junk.write_bytes(b"\x00" * 64)
     with pytest.raises(ValueError, match="junk.safetensors"):
         flapper.Policy.load(str(junk))
-    policy = flapper.Policy.load(str(root / "policies/stage1/policy.safetensors"))
+    policy = flapper.Policy.load(str(root / "policies/history/stage1/policy.safetensors"))
     with pytest.raises(ValueError, match="540"):
         policy.act(np.zeros((2, 100), np.float32))
     with pytest.raises(ValueError, match="finite"):

@@ -31,7 +31,7 @@ def fly(policy_path, reference, episodes, seed):
 
 
 def test_shipped_policy_reproduces_flapper_eval_bit_for_bit(root, tmp_path):
-    policy, reference, episodes, seed = root / "policies/stage4/policy.safetensors", "lateral", 4, 11
+    policy, reference, episodes, seed = root / "policies/history/stage4/policy.safetensors", "lateral", 4, 11
     completed, rms = fly(str(policy), reference, episodes, seed)
     cargo_run("flapper-cli", [], ["eval", "--policy", policy, "--reference", reference, "--episodes", episodes,
                                   "--seed", seed, "--no-baseline", "--observations", "--out", tmp_path])
@@ -82,10 +82,10 @@ def test_golden_actions_bit_for_bit(root):
 
 
 def test_policy_mean_action(root):
-    policy = flapper.Policy.load(str(root / "policies/stage2/policy.safetensors"))
+    policy = flapper.Policy.load(str(root / "policies/history/stage2/policy.safetensors"))
     assert policy.observation_size == 540 and policy.action_size == 5
     assert "[episode]" in policy.task_toml
-    env = flapper.FlightVectorEnv(3, policy=str(root / "policies/stage2/policy.safetensors"), seed=4)
+    env = flapper.FlightVectorEnv(3, policy=str(root / "policies/history/stage2/policy.safetensors"), seed=4)
     obs, _ = env.reset(seed=4)
     actions = policy.act(obs)
     assert actions.shape == (3, 5) and actions.dtype == np.float32

@@ -3,13 +3,14 @@ stopped by the sweep, then run again: finished trials are skipped, nothing of Ra
 
 import csv
 import subprocess
+import tomllib
 
 import pytest
 
 from conftest import ROOT, cargo_run
 
 pytest.importorskip("ray", reason="the sweep extra: pip install './crates/flapper-py[sweep]'")
-from flapper.sweep import SweepError, load_sweep, run_sweep  # noqa: E402
+from flapper.sweep import SweepError, load_sweep, run_sweep, trial_config  # noqa: E402
 
 TINY_TRAIN = """[runner]
 envs = 4
@@ -73,3 +74,14 @@ def test_bad_sweep_files_are_refused_naming_the_problem(tmp_path):
         path.write_text(text)
         with pytest.raises(SweepError, match=needle):
             load_sweep(path)
+
+
+def test_a_trial_of_a_config_that_extends_another_still_finds_its_base(tmp_path):
+    (tmp_path / "experiments").mkdir()
+    (tmp_path / "experiments" / "x.toml").write_text('extends = "../base.toml"\nseed = 4\n')
+    (tmp_path / "base.toml").write_text("seed = 3\n")
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('config = "experiments/x.toml"\nseeds = [1]\n')
+    text = trial_config(load_sweep(sweep), {"name": "base"})
+    written = tomllib.loads(text)
+    assert written["extends"] == str(tmp_path.resolve() / "base.toml") and written["seed"] == 4, text

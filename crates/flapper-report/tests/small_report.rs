@@ -47,7 +47,7 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
     let out = std::env::temp_dir().join(format!("flapper-small-report-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let settings = ReportSettings {
-        policy: root.join("policies/stage3/policy.safetensors"),
+        policy: root.join("policies/history/stage3/policy.safetensors"),
         curriculum: root.join("policies/final"),
         episodes: 1,
         robustness_episodes: 1,

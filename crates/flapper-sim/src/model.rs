@@ -1,5 +1,6 @@
 //! Loading the robot's MJCF into MuJoCo and finding its parts by name. A [`RobotModel`] is the
-//! shared, read-only template; each environment gets its own [`Simulator`] from it.
+//! shared, read-only template; each environment gets its own `Simulator` from it (`instantiate`, defined
+//! beside the simulator, which is built from the model).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -8,7 +9,6 @@ use mujoco_rs::prelude::*;
 
 use crate::error::ModelError;
 use crate::robot::{ActuatedJoint, BASE_JOINT, BODY_NAMES, LIFTING_SURFACE_GEOMS, N_ACTUATED_JOINTS, ROBOT_MJCF};
-use crate::simulator::Simulator;
 
 /// Indices into MuJoCo's arrays, resolved once from names.
 #[derive(Debug, Clone)]
@@ -134,12 +134,6 @@ impl RobotModel {
 
     pub(crate) fn layout(&self) -> &Arc<Layout> {
         &self.layout
-    }
-
-    /// A new simulation instance with its own copy of the model (so per-instance edits such as wind
-    /// or masses do not leak between environments), reset to the default initial state.
-    pub fn instantiate(&self) -> Result<Simulator, ModelError> {
-        Simulator::new(self)
     }
 
     /// Simulation time step in seconds (0.004 s: 250 Hz).

@@ -69,8 +69,16 @@ pub struct Simulator {
     constants_stale: bool,
 }
 
+impl RobotModel {
+    /// A new simulation instance with its own copy of the model (so per-instance edits such as wind
+    /// or masses do not leak between environments), reset to the default initial state.
+    pub fn instantiate(&self) -> Result<Simulator, ModelError> {
+        Simulator::new(self)
+    }
+}
+
 impl Simulator {
-    pub(crate) fn new(robot: &RobotModel) -> Result<Self, ModelError> {
+    fn new(robot: &RobotModel) -> Result<Self, ModelError> {
         let model = robot.mujoco().clone();
         let data = MjData::try_new(Box::new(model))
             .map_err(|e| ModelError::Load { origin: robot.origin().to_owned(), message: e.to_string() })?;

@@ -32,35 +32,14 @@
 use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, Simulator};
 use serde::{Deserialize, Serialize};
 
+use crate::config::{ActionMode, ControlConfig, OscillatorA2};
+
 /// Action size (n_j = 5).
 pub const ACTION_SIZE: usize = N_ACTUATED_JOINTS;
 
 /// Wing-pitch swing per unit of flap amplitude in `flap_oscillator` mode (the scripted gait's 10 deg
 /// for 20 deg).
 pub const PITCH_SWING_PER_FLAP: f64 = 0.5;
-
-/// What an action asks for.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ActionMode {
-    /// One joint target per joint (paper III-C).
-    #[default]
-    JointTargets,
-    /// Flap amplitude, flap frequency, flap bias, roll (differential wing pitch and amplitude), tail pitch.
-    FlapOscillator,
-}
-
-/// What the oscillator's second action asks for (`control.oscillator_a2`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum OscillatorA2 {
-    /// The flap frequency, over `flap_frequency_hz`.
-    #[default]
-    Frequency,
-    /// A common pitch of both wings (angle of attack: lift and drag without a flap), the frequency fixed
-    /// at the middle of `flap_frequency_hz`.
-    WingPitch,
-}
 
 /// What the flapping oscillator carries from one step to the next (all 0 in `joint_targets` mode).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -102,7 +81,7 @@ fn clipped(action: &[f32], i: usize) -> f64 {
 impl ActionMap {
     /// Scales to `action_scale` times each joint's limit (symmetric ranges: the nominal pose is 0); the
     /// oscillator's settings come from `control` too, its phase steps by `control_period_s`.
-    pub fn new(sim: &Simulator, control: &crate::config::ControlConfig, control_period_s: f64) -> Self {
+    pub fn new(sim: &Simulator, control: &ControlConfig, control_period_s: f64) -> Self {
         let ranges = sim.joint_ranges();
         Self {
             half_range_rad: ranges.map(|[low, high]| control.action_scale * high.min(-low)),

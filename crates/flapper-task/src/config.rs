@@ -60,13 +60,13 @@ pub struct ControlConfig {
     /// Fraction of each joint's limit that an action of +-1 reaches.
     pub action_scale: f64,
     /// What the five action numbers mean: joint targets (the paper) or a flapping oscillator's
-    /// amplitude, frequency, bias, roll and tail ([`crate::action::ActionMode`]).
-    pub action_mode: crate::action::ActionMode,
+    /// amplitude, frequency, bias, roll and tail ([`ActionMode`]).
+    pub action_mode: ActionMode,
     /// The oscillator's frequency range (Hz), from an action of -1 to +1 (`flap_oscillator` only).
     pub flap_frequency_hz: [f64; 2],
     /// What the oscillator's second action asks for: the frequency (default) or a common wing pitch,
     /// the frequency then fixed at the middle of `flap_frequency_hz` (`flap_oscillator` only).
-    pub oscillator_a2: crate::action::OscillatorA2,
+    pub oscillator_a2: OscillatorA2,
     /// Flap amplitude difference per unit of the roll action (`flap_oscillator` only): left
     /// A (1 - k a4), right A (1 + k a4); 0 rolls by wing pitch alone.
     pub differential_flap: f64,
@@ -80,6 +80,29 @@ pub struct ControlConfig {
     /// wing pitch) (`flap_oscillator` only); 0 leaves them free. Unlike the filter it delays no slow change: it
     /// bounds how fast the stroke's shape moves, so a dither between steps shrinks to this rate.
     pub flap_shape_rate_limit: f64,
+}
+
+/// What an action asks for.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActionMode {
+    /// One joint target per joint (paper III-C).
+    #[default]
+    JointTargets,
+    /// Flap amplitude, flap frequency, flap bias, roll (differential wing pitch and amplitude), tail pitch.
+    FlapOscillator,
+}
+
+/// What the oscillator's second action asks for (`control.oscillator_a2`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OscillatorA2 {
+    /// The flap frequency, over `flap_frequency_hz`.
+    #[default]
+    Frequency,
+    /// A common pitch of both wings (angle of attack: lift and drag without a flap), the frequency fixed
+    /// at the middle of `flap_frequency_hz`.
+    WingPitch,
 }
 
 /// Paper III-C: 25 frames of history (0.5 s) and 30 reference points ahead (0.6 s).
@@ -267,9 +290,9 @@ impl Default for ControlConfig {
             substeps: 5,
             filter_cutoff_hz: 7.0,
             action_scale: 1.0,
-            action_mode: crate::action::ActionMode::JointTargets,
+            action_mode: ActionMode::JointTargets,
             flap_frequency_hz: [3.0, 8.0],
-            oscillator_a2: crate::action::OscillatorA2::Frequency,
+            oscillator_a2: OscillatorA2::Frequency,
             differential_flap: 0.0,
             flap_amplitude_max: 1.0,
             flap_shape_filter_hz: 0.0,
@@ -643,9 +666,9 @@ mod tests {
         assert_eq!(c.reward.position_weight, 0.5, "untouched keys keep the preset");
         assert_eq!(c.control.filter_cutoff_hz, 5.0);
         assert_eq!(c.reference.vertical_speed_mps, [-1.5, 1.0]);
-        assert_eq!(c.control.action_mode, crate::action::ActionMode::JointTargets, "the paper's actions by default");
+        assert_eq!(c.control.action_mode, ActionMode::JointTargets, "the paper's actions by default");
         let c = TaskConfig::from_toml("stage = 4\n[control]\naction_mode = \"flap_oscillator\"\n", "t.toml").unwrap();
-        assert_eq!(c.control.action_mode, crate::action::ActionMode::FlapOscillator);
+        assert_eq!(c.control.action_mode, ActionMode::FlapOscillator);
         assert!(c.randomization.enabled, "the stage preset stays");
     }
 

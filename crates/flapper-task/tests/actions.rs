@@ -5,8 +5,8 @@
 use std::f64::consts::TAU;
 
 use flapper_sim::{ActuatedJoint, RobotModel};
-use flapper_task::action::{ActionMap, ActionMode, OscillatorState, PITCH_SWING_PER_FLAP};
-use flapper_task::config::{ControlConfig, TaskConfig};
+use flapper_task::action::{ActionMap, OscillatorState, PITCH_SWING_PER_FLAP};
+use flapper_task::config::{ActionMode, ControlConfig, TaskConfig};
 
 const PERIOD_S: f64 = 0.02;
 
@@ -254,7 +254,7 @@ fn the_rate_limit_caps_how_fast_the_shape_moves_without_delaying_a_slow_change()
 
 #[test]
 fn a_wing_pitch_second_action_pitches_both_wings_alike_at_a_fixed_frequency_and_starts_where_they_are() {
-    use flapper_task::action::OscillatorA2;
+    use flapper_task::config::OscillatorA2;
     let control = ControlConfig {
         action_mode: ActionMode::FlapOscillator,
         oscillator_a2: OscillatorA2::WingPitch,

@@ -83,7 +83,7 @@ fn history_shifts_by_one_frame_per_step() {
 
 #[test]
 fn the_action_rate_term_reads_the_change_of_the_applied_action_and_joins_the_reward_only_when_weighted() {
-    use flapper_task::action::ActionMode;
+    use flapper_task::config::ActionMode;
     let env = |mode: ActionMode, weight: f64| {
         let mut config = exact_start(TaskConfig::default());
         config.control.action_mode = mode;
@@ -354,7 +354,7 @@ fn a_snapshot_continues_every_episode_bit_for_bit() {
 #[test]
 fn a_snapshot_continues_the_flapping_oscillator_in_its_phase_and_filtered_shape() {
     let mut config = TaskConfig::stage(4).unwrap();
-    config.control.action_mode = flapper_task::action::ActionMode::FlapOscillator;
+    config.control.action_mode = flapper_task::config::ActionMode::FlapOscillator;
     config.control.flap_shape_filter_hz = 2.0;
     snapshot_continues(config);
 }

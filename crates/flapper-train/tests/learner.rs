@@ -365,8 +365,8 @@ fn evaluation_reads_the_same_task_from_a_policy_as_training_saved() {
     // flapper_eval::load_flight_policy reads only the saved config's [task]; it must be the task the
     // run trained on, for every shipped policy.
     for stage in 1..=4 {
-        let path =
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../policies/stage{stage}/policy.safetensors"));
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("../../policies/history/stage{stage}/policy.safetensors"));
         let saved = checkpoint::load(&path).unwrap().info.config_toml;
         let trained = TrainConfig::from_toml(&saved, "saved", None).unwrap().task;
         let (_, evaluated) = flapper_eval::load_flight_policy(&path).unwrap();

@@ -56,7 +56,7 @@ fn extreme_number() -> impl Strategy<Value = String> {
     ]
 }
 
-const STAGE3: &str = include_str!("../../../configs/stage3.toml");
+const STAGE3: &str = include_str!("../../../configs/experiments/stage3.toml");
 
 fn config_result(text: &str) -> Result<TrainConfig, String> {
     TrainConfig::from_toml(text, "fuzz.toml", None).map_err(|e| e.to_string())

@@ -17,7 +17,8 @@ folder continues exactly where it stopped). The sweep file:
 
     [[variants]]                        # optional; without it one variant, "base"
     name = "kl-0.02"
-    set = { "stages.2.ppo.desired_kl" = 0.02 }   # dotted keys; a number indexes a list (0-based)
+    set = { "stages.2.ppo.desired_kl" = 0.02 }   # dotted keys; a number indexes a list (0-based): in a
+                                                 # config that extends another, its own [[stages]] entries
 
     [evaluation]                        # optional
     references = ["cruise", "lateral"]
@@ -110,6 +111,9 @@ def trial_config(sweep, variant):
 
     base = tomllib.loads(sweep["config"].read_text())
     table = copy.deepcopy(base)
+    if "extends" in table:
+        # The trial's copy lives in another folder: the curriculum it builds on, found from there.
+        table["extends"] = str((sweep["config"].parent / table["extends"]).resolve())
     # Each training uses the CPUs Ray gives its trial (unless the variant says otherwise).
     set_dotted(table, "runner.threads", sweep["cpus_per_trial"], sweep["origin"])
     for key, value in variant.get("set", {}).items():
