@@ -87,7 +87,11 @@ pub fn bench_command(
     );
     println!("  CPU-independent path (evaluation, Python, on board)  {:.1} us", latency.exact_us);
     println!("  the same, actor only                                 {:.1} us", latency.exact_actor_us);
-    println!("  training path (fixed_matmul, {}, actor only)   {:.1} us", flapper_ppo::fixed_matmul::Simd::active().name(), latency.training_path_us);
+    println!(
+        "  training path (fixed_matmul, {}, actor only)   {:.1} us",
+        flapper_ppo::fixed_matmul::Simd::active().name(),
+        latency.training_path_us
+    );
     if train_iterations > 0 {
         let envs = if envs > 0 { envs } else { 256 };
         let t = flapper_train::benchmark::time_training(robot, envs, threads, train_iterations)?;

@@ -6,7 +6,8 @@ use std::path::Path;
 use flapper_eval::FlightPolicyFile;
 use flapper_ppo::checkpoint::CheckpointKind;
 use flapper_sim::{ActuatedJoint, N_ACTUATED_JOINTS, RobotModel};
-use flapper_task::action::{ActionMap, ActionMode};
+use flapper_task::action::ActionMap;
+use flapper_task::config::ActionMode;
 use flapper_task::observation::{FRAME_SIZE, ObservationLayout};
 use serde::Serialize;
 
