@@ -274,7 +274,7 @@ fn policy_loss(
             }
         }
     }
-    policy.actor.backward(workspace, d_mean, actor_grads, threads);
+    policy.actor.backward(workspace, observations, d_mean, actor_grads, threads);
     terms
 }
 
@@ -314,7 +314,7 @@ fn value_loss(
         total += loss as f64;
         d_value[local] = config.value_loss_coef * d * inv_n;
     }
-    policy.critic.backward(workspace, d_value, critic_grads, threads);
+    policy.critic.backward(workspace, observations, d_value, critic_grads, threads);
     total
 }
 

@@ -78,7 +78,6 @@ impl PartialEq for TransposedWeights {
 #[derive(Debug, Clone, Default)]
 pub struct Workspace {
     batch: usize,
-    input: Vec<f32>,
     outputs: Vec<Vec<f32>>,
     delta: Vec<f32>,
     delta_next: Vec<f32>,
@@ -153,10 +152,16 @@ impl Mlp {
                 .map(|layer| {
                     let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
                     let weight = &self.params[self.tensors[2 * layer].range.clone()];
+                    // In 16 x 16 blocks, so that reads and writes both stay within a few cache lines.
+                    const BLOCK: usize = 16;
                     let mut t = vec![0.0; weight.len()];
-                    for (j, row) in weight.chunks_exact(fan_in).enumerate() {
-                        for (i, &w) in row.iter().enumerate() {
-                            t[i * fan_out + j] = w;
+                    for j0 in (0..fan_out).step_by(BLOCK) {
+                        for i0 in (0..fan_in).step_by(BLOCK) {
+                            for j in j0..(j0 + BLOCK).min(fan_out) {
+                                for i in i0..(i0 + BLOCK).min(fan_in) {
+                                    t[i * fan_out + j] = weight[j * fan_in + i];
+                                }
+                            }
                         }
                     }
                     t
@@ -176,14 +181,12 @@ impl Mlp {
         assert_eq!(input.len(), batch * self.input_size(), "input is not {batch} x {}", self.input_size());
         let layers = self.sizes.len() - 1;
         ws.batch = batch;
-        ws.input.clear();
-        ws.input.extend_from_slice(input);
         ws.outputs.resize_with(layers, Vec::new);
         for layer in 0..layers {
             let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
             let bias = &self.params[self.tensors[2 * layer + 1].range.clone()];
             let (before, rest) = ws.outputs.split_at_mut(layer);
-            let previous: &[f32] = if layer == 0 { &ws.input } else { &before[layer - 1] };
+            let previous: &[f32] = if layer == 0 { input } else { &before[layer - 1] };
             let out = &mut rest[0];
             out.resize(batch * fan_out, 0.0);
             // out = bias + x W^T, each element one chain from its bias.
@@ -227,10 +230,12 @@ impl Mlp {
         &ws.outputs[layers - 1]
     }
 
-    /// Backward pass for the batch of the last `forward` on `ws`, given the loss gradient with respect
-    /// to the outputs. Writes the gradient of every parameter into `grads` (same layout as `params`).
-    pub fn backward(&self, ws: &mut Workspace, d_output: &[f32], grads: &mut [f32], threads: usize) {
+    /// Backward pass for the batch of the last `forward` on `ws` (whose `input` is passed again), given
+    /// the loss gradient with respect to the outputs. Writes the gradient of every parameter into `grads`
+    /// (same layout as `params`).
+    pub fn backward(&self, ws: &mut Workspace, input: &[f32], d_output: &[f32], grads: &mut [f32], threads: usize) {
         let batch = ws.batch;
+        assert_eq!(input.len(), batch * self.input_size(), "not the input of the last forward pass");
         let layers = self.sizes.len() - 1;
         assert_eq!(d_output.len(), batch * self.output_size());
         assert_eq!(grads.len(), self.params.len());
@@ -239,7 +244,7 @@ impl Mlp {
         for layer in (0..layers).rev() {
             let (fan_in, fan_out) = (self.sizes[layer], self.sizes[layer + 1]);
             let (weight, bias) = (self.tensors[2 * layer].range.clone(), self.tensors[2 * layer + 1].range.clone());
-            let previous: &[f32] = if layer == 0 { &ws.input } else { &ws.outputs[layer - 1] };
+            let previous: &[f32] = if layer == 0 { input } else { &ws.outputs[layer - 1] };
             // dW [out x in] = delta^T [out x batch] * previous [batch x in]
             let delta_t = Strided::transposed(&ws.delta, fan_out);
             rows_in_parallel(
@@ -340,7 +345,7 @@ mod tests {
         let mut ws = Workspace::default();
         net.forward(&x, batch, &mut ws, 1);
         let mut grads = vec![0.0; net.params().len()];
-        net.backward(&mut ws, &c, &mut grads, 1);
+        net.backward(&mut ws, &x, &c, &mut grads, 1);
         let eps = 1e-2f32;
         for tensor in net.tensors().to_vec() {
             let mut worst: f64 = 0.0;
@@ -382,7 +387,7 @@ mod tests {
             let mut ws = Workspace::default();
             let y = net.forward(&x, batch, &mut ws, threads).to_vec();
             let mut grads = vec![0.0; net.params().len()];
-            net.backward(&mut ws, &d, &mut grads, threads);
+            net.backward(&mut ws, &x, &d, &mut grads, threads);
             (y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), grads.iter().map(|g| g.to_bits()).collect::<Vec<_>>())
         };
         let one = run(1);
