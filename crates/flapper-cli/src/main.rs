@@ -137,6 +137,8 @@ fn one_line(error: &anyhow::Error) -> String {
 }
 
 fn run(cli: Cli) -> Result<()> {
+    // Training's vector path may be forced narrower (docs/training.md); a wrong value is refused, not ignored.
+    flapper_ppo::fixed_matmul::Simd::from_environment().map_err(anyhow::Error::msg)?;
     let model = cli.model.as_deref();
     match cli.command {
         Command::Fly(args) => fly::run(args, model),

@@ -72,6 +72,21 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 #[test]
+fn a_vector_path_that_is_not_one_is_refused_naming_the_variable_and_the_value() {
+    for value in ["avx3", "sse"] {
+        let output = Command::new(env!("CARGO_BIN_EXE_flapper"))
+            .args(["bench", "--blocks", "1", "--steps", "5", "--envs", "0", "--train-iterations", "0"])
+            .env(SIMD_VARIABLE, value)
+            .output()
+            .expect("run flapper bench");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{value}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(SIMD_VARIABLE) && stderr.contains(value), "{stderr}");
+    }
+}
+
+#[test]
 fn training_is_the_same_on_any_thread_count_and_any_vector_width() {
     let dir = std::env::temp_dir().join(format!("flapper-reproducible-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);

@@ -113,17 +113,31 @@ pub enum Simd {
 pub const SIMD_VARIABLE: &str = "FLAPPER_SIMD";
 
 impl Simd {
-    /// The path this process uses: the widest the CPU has, or `FLAPPER_SIMD`'s if that is narrower
-    /// (a wider one than the CPU has, or an unknown name, falls back to the CPU's widest).
+    /// The path this process uses: `FLAPPER_SIMD`'s where it is set and valid
+    /// ([`Simd::from_environment`]), else the widest the CPU has. A program checks the variable with
+    /// `from_environment` first, to refuse a wrong one instead of running on the widest path.
     pub fn active() -> Self {
         static ACTIVE: OnceLock<Simd> = OnceLock::new();
-        *ACTIVE.get_or_init(|| {
-            let widest = Self::widest();
-            match std::env::var(SIMD_VARIABLE).ok().as_deref().and_then(Self::from_name) {
-                Some(asked) if asked.lanes() <= widest.lanes() => asked,
-                _ => widest,
-            }
-        })
+        *ACTIVE.get_or_init(|| Self::from_environment().ok().flatten().unwrap_or_else(Self::widest))
+    }
+
+    /// The path `FLAPPER_SIMD` asks for: `None` where it is unset or empty; an error naming the value
+    /// where it is not a path's name or asks a wider path than this CPU has.
+    pub fn from_environment() -> Result<Option<Self>, String> {
+        let Ok(value) = std::env::var(SIMD_VARIABLE) else { return Ok(None) };
+        if value.trim().is_empty() {
+            return Ok(None);
+        }
+        let asked = Self::from_name(&value)
+            .ok_or_else(|| format!("{SIMD_VARIABLE}='{value}' is not one of avx512, avx2, portable"))?;
+        let widest = Self::widest();
+        if asked.lanes() > widest.lanes() {
+            return Err(format!(
+                "{SIMD_VARIABLE}='{value}' asks for a wider vector path than this CPU has (its widest: {})",
+                widest.name()
+            ));
+        }
+        Ok(Some(asked))
     }
 
     /// The widest path this CPU runs.
