@@ -103,6 +103,10 @@ fn report_progress(event: Progress) {
                 if gate_met { "; gate met" } else { "" }
             );
         }
+        Progress::StageExtended { stage, extension } => println!(
+            "stage {stage}: budget of {} iterations spent without meeting the gate, {}; {} iterations more",
+            extension.at_iteration, extension.reason, extension.added_iterations
+        ),
         Progress::StageDone { outcome } => println!(
             "stage {} ({}) done: {} iterations, {:.2} M steps, {:.0} s; hands over iteration {} ({:.1}% completed, RMS {:.3} m{}){}",
             outcome.stage,

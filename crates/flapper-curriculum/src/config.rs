@@ -398,6 +398,32 @@ impl CurriculumConfig {
         Ok(stage.max_iterations.min(left - left % stage.validate_every))
     }
 
+    /// The iterations stage `number` may add to its budget once it has trained `trained` of them (its
+    /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
+    /// run's `max_env_steps` leaves after every later stage's own `max_iterations`; a multiple of
+    /// `validate_every` (0: no room).
+    pub fn extension_iterations(
+        &self,
+        number: usize,
+        spent_env_steps: u64,
+        trained: usize,
+    ) -> Result<usize, TrainConfigError> {
+        let stage = &self.stages[number - 1];
+        let per_iteration = |k: usize| -> Result<u64, TrainConfigError> {
+            let train = self.stage_train_config(k)?;
+            Ok((train.runner.envs * train.ppo.steps_per_env) as u64)
+        };
+        let mut room = stage.max_iterations / 2;
+        if let Some(total) = self.max_env_steps {
+            let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
+            for later in number + 1..=self.stages.len() {
+                reserved += self.stages[later - 1].max_iterations as u64 * per_iteration(later)?;
+            }
+            room = room.min((total.saturating_sub(reserved) / per_iteration(number)?) as usize);
+        }
+        Ok(room - room % stage.validate_every)
+    }
+
     /// How many checkpoints stage `number`'s validations average (1: none).
     pub fn averaged_checkpoints(&self, number: usize) -> usize {
         self.stages[number - 1].average_checkpoints.unwrap_or(1)
@@ -461,6 +487,23 @@ task = { stage = 2 }
         assert_ne!(c.validation_seed(1), first.runner.seed);
         let again = CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap();
         assert_eq!(again, c, "the saved curriculum reads back as it was");
+    }
+
+    #[test]
+    fn a_stage_extends_by_half_its_budget_within_what_the_run_leaves_after_the_later_stages() {
+        let mut c = CurriculumConfig::from_toml(TINY, "tiny.toml").unwrap();
+        // No run budget: half of stage 1's 4 iterations, a multiple of its validation interval (2).
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 2);
+        // Stage 1 takes 32 steps an iteration, stage 2 16 and keeps its 2 iterations (32 steps).
+        c.max_env_steps = Some(4 * 32 + 32 + 2 * 32);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 2, "room for 2 more, half the budget caps it");
+        c.max_env_steps = Some(4 * 32 + 32 + 32);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "room for 1, not a whole validation interval");
+        c.max_env_steps = Some(4 * 32 + 32);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "nothing beyond the later stage's budget");
+        // The last stage keeps nothing back: 1 iteration of 16 steps left after 64 spent and 2 trained.
+        c.max_env_steps = Some(64 + 2 * 16 + 16);
+        assert_eq!(c.extension_iterations(2, 64, 2).unwrap(), 1);
     }
 
     fn shipped(file: &str) -> CurriculumConfig {

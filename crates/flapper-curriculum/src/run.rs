@@ -5,7 +5,9 @@
 //! at the end, `policy.safetensors` (the last stage's selected checkpoint as a policy file).
 //!
 //! A stage trains until its gate is met at a validation (from `min_iterations` on) or its budget is
-//! spent; it hands over its best validated checkpoint (never simply the last), and the next stage starts
+//! spent; a stage whose budget ran out while its validations still improve is given more iterations
+//! (`stageK/extensions.json`; at most [`MAX_EXTENSIONS`], within the run's budget after the later stages'),
+//! else it stops the run. It hands over its best validated checkpoint (never simply the last), and the next stage starts
 //! from that checkpoint with its own action noise. Running again on the same folder picks up where it
 //! stopped: finished stages are read back, an interrupted one resumes from its last checkpoint (exactly,
 //! as `flapper train --resume` does), a checkpoint saved but not yet judged is judged first.
@@ -26,8 +28,8 @@ use crate::figure::write_curriculum_figure;
 use crate::glide::glide_fraction;
 use crate::identification::identification_fit_percent;
 use crate::selection::{
-    GateColumns, Selection, StageOutcome, StoppedStage, Validated, meets_flight_bars, stage_validation_time_s,
-    stage_wall_time_s,
+    Extension, GateColumns, Selection, StageOutcome, StoppedStage, Validated, meets_flight_bars,
+    stage_validation_time_s, stage_wall_time_s,
 };
 use crate::summary::Summary;
 use crate::validation::{ValidationError, ValidationSet};
@@ -45,11 +47,37 @@ pub struct CurriculumRequest<'a> {
 /// Progress the caller may show: a stage starting (with its budget in `iterations`: its `max_iterations`,
 /// or less where the run's `max_env_steps` says so), each iteration, each validation.
 pub enum Progress<'a> {
-    StageStarts { stage: usize, of: usize, config: &'a StageConfig, iterations: usize, resumed_at: usize },
-    Iteration { stage: usize, log: &'a IterationLog },
-    Validated { stage: usize, row: &'a Validated, gate_met: bool },
-    StageDone { outcome: &'a StageOutcome },
+    StageStarts {
+        stage: usize,
+        of: usize,
+        config: &'a StageConfig,
+        iterations: usize,
+        resumed_at: usize,
+    },
+    Iteration {
+        stage: usize,
+        log: &'a IterationLog,
+    },
+    Validated {
+        stage: usize,
+        row: &'a Validated,
+        gate_met: bool,
+    },
+    /// A stage that spent its budget without meeting its gate, still learning, given more iterations.
+    StageExtended {
+        stage: usize,
+        extension: &'a Extension,
+    },
+    StageDone {
+        outcome: &'a StageOutcome,
+    },
 }
+
+/// How many validations make a stage's recent trend ([`Selection::still_improving`]).
+pub const TREND_WINDOW: usize = 4;
+
+/// How many times one stage may be extended.
+pub const MAX_EXTENSIONS: usize = 2;
 
 /// Runs (or continues) the curriculum; returns the stages done.
 pub fn run_curriculum(
@@ -161,9 +189,15 @@ fn run_stage(
             needed,
         });
     }
+    let mut extensions = read_extensions(&here)?;
+    let mut iterations = iterations + extensions.iter().map(|e| e.added_iterations).sum::<usize>();
     train_config.runner.iterations = iterations;
-    let set =
-        ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?;
+    let set = Arc::new(ValidationSet::new(
+        &stage.validation,
+        &train_config.task,
+        robot.timestep_s(),
+        config.validation_seed(number),
+    )?);
     let names = set.names();
     let selection_path = here.join("selection.csv");
     let mut selection = Selection::read(&selection_path, &names, GateColumns::of(&stage.gate))?;
@@ -172,8 +206,10 @@ fn run_stage(
     let resumed_at = saved.last().map(|(iteration, _)| *iteration);
     // Done training: the final policy is written, or the budget is spent, or the gate was met before
     // the last checkpoint (the run stops one iteration after the validation that meets it).
-    let finished = here.join("policy.safetensors").exists()
+    // (An extended stage wrote its policy when its first budget ran out: only its checkpoints tell.)
+    let mut finished = (here.join("policy.safetensors").exists() && extensions.is_empty())
         || resumed_at.is_some_and(|at| at >= iterations || selection.gate_met_before(&stage.gate, at));
+    let mut resumed_at = resumed_at;
     // Judge what is saved but not judged (an interruption between a checkpoint and its validation);
     // rows after the last checkpoint belong to iterations the resumed run will do again.
     selection.truncate_after(resumed_at.unwrap_or(0));
@@ -189,30 +225,84 @@ fn run_stage(
     std::fs::create_dir_all(&here).map_err(|e| CurriculumError::File { path: here.clone(), message: e.to_string() })?;
     selection.write(&selection_path, &names)?;
 
-    if !finished {
-        progress(Progress::StageStarts {
-            stage: number,
-            of: config.stages.len(),
-            config: stage,
-            iterations,
-            resumed_at: resumed_at.unwrap_or(0),
+    loop {
+        if !finished {
+            progress(Progress::StageStarts {
+                stage: number,
+                of: config.stages.len(),
+                config: stage,
+                iterations,
+                resumed_at: resumed_at.unwrap_or(0),
+            });
+            let start = match (resumed_at, &previous) {
+                (Some(_), _) => Start::Resume,
+                (None, Some(path)) => Start::InitFrom(path.clone()),
+                (None, None) => Start::Fresh,
+            };
+            let mut run_config =
+                if matches!(start, Start::Resume) { saved_config(&here)? } else { train_config.clone() };
+            run_config.runner.iterations = iterations;
+            let round = Round { robot, stage, number, here: &here, names: &names, set: &set, averaged };
+            selection = round.train(&run_config, start, selection, progress)?;
+        }
+        if choose(stage, &selection).is_some() || extensions.len() >= MAX_EXTENSIONS {
+            break;
+        }
+        let Some(improvement) = selection.still_improving(TREND_WINDOW) else { break };
+        let added = config.extension_iterations(number, spent_env_steps, iterations).map_err(RunError::from)?;
+        if added == 0 {
+            break;
+        }
+        extensions.push(Extension {
+            at_iteration: iterations,
+            added_iterations: added,
+            reason: improvement.describe(TREND_WINDOW),
         });
-        let start = match (resumed_at, &previous) {
-            (Some(_), _) => Start::Resume,
-            (None, Some(path)) => Start::InitFrom(path.clone()),
-            (None, None) => Start::Fresh,
-        };
-        let train_config = if matches!(start, Start::Resume) { saved_config(&here)? } else { train_config };
-        let mut trainer = flight_trainer(robot, &train_config, &here, start)?;
+        write_extensions(&here, &extensions)?;
+        progress(Progress::StageExtended { stage: number, extension: extensions.last().expect("just pushed") });
+        iterations += added;
+        resumed_at = saved_checkpoints(&here).last().map(|(iteration, _)| *iteration);
+        finished = false;
+    }
+    select(stage, number, &here, &selection, averaged, extensions)
+}
+
+/// One stage's training from `start` to its config's iterations, each checkpoint judged on the
+/// validation set as it is saved.
+struct Round<'a> {
+    robot: &'a RobotModel,
+    stage: &'a StageConfig,
+    number: usize,
+    here: &'a Path,
+    names: &'a [String],
+    set: &'a Arc<ValidationSet>,
+    averaged: usize,
+}
+
+impl Round<'_> {
+    fn train(
+        &self,
+        run_config: &flapper_train::config::TrainConfig,
+        start: Start,
+        selection: Selection,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<Selection, CurriculumError> {
+        let (number, averaged) = (self.number, self.averaged);
+        let mut trainer = flight_trainer(self.robot, run_config, self.here, start)?;
         let shared = Arc::new(Mutex::new((selection, Vec::<Validated>::new())));
         let hook_state = shared.clone();
-        let (hook_robot, hook_names, hook_path, hook_gate) =
-            (robot.clone(), names.clone(), selection_path.clone(), stage.gate.clone());
+        let (hook_robot, hook_names, hook_path, hook_gate, hook_set) = (
+            self.robot.clone(),
+            self.names.to_vec(),
+            self.here.join("selection.csv"),
+            self.stage.gate.clone(),
+            self.set.clone(),
+        );
         trainer.add_checkpoint_hook(Box::new(move |event| {
             let env_steps = event.history.last().map_or(0, |l| l.env_steps);
             let path = judged_policy(event.dir, event.iteration, averaged).map_err(|e| e.to_string())?;
-            let row =
-                judge(&hook_robot, &set, &hook_gate, event.iteration, env_steps, &path).map_err(|e| e.to_string())?;
+            let row = judge(&hook_robot, &hook_set, &hook_gate, event.iteration, env_steps, &path)
+                .map_err(|e| e.to_string())?;
             let mut state = hook_state.lock().expect("no panic while holding the selection");
             state.0.rows.retain(|r| r.iteration != row.iteration);
             state.0.rows.push(row.clone());
@@ -220,7 +310,7 @@ fn run_stage(
             state.1.push(row);
             Ok(())
         }));
-        let gate = stage.gate.clone();
+        let gate = self.stage.gate.clone();
         trainer.run(&mut |log, _| {
             progress(Progress::Iteration { stage: number, log });
             let mut state = shared.lock().expect("no panic while holding the selection");
@@ -231,9 +321,35 @@ fn run_stage(
             !state.0.gate_met(&gate)
         })?;
         let state = shared.lock().expect("no panic while holding the selection");
-        selection = state.0.clone();
+        Ok(state.0.clone())
     }
-    select(stage, number, &here, &selection, averaged)
+}
+
+/// The stage's extensions so far (`extensions.json`; none before the first).
+fn read_extensions(here: &Path) -> Result<Vec<Extension>, CurriculumError> {
+    let path = here.join("extensions.json");
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    flapper_files::read_json(&path).map_err(|message| CurriculumError::File { path, message })
+}
+
+fn write_extensions(here: &Path, extensions: &[Extension]) -> Result<(), CurriculumError> {
+    let path = here.join("extensions.json");
+    flapper_files::write_json(&path, &extensions).map_err(|e| CurriculumError::File { path, message: e.to_string() })
+}
+
+/// The checkpoint a stage hands over, and whether it met the identification bar (where the gate has
+/// one): the best that meets the gate, else, where the identification is sought but not required, the
+/// best that flies every other bar.
+fn choose<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<(&'a Validated, Option<bool>)> {
+    match selection.best_meeting(&stage.gate) {
+        Some(best) => Some((best, stage.gate.identification_fit_percent.map(|_| true))),
+        None => selection
+            .best_flying(&stage.gate)
+            .filter(|_| stage.gate.identification_fit_percent.is_some() && !stage.gate.identification_required)
+            .map(|b| (b, Some(false))),
+    }
 }
 
 /// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the
@@ -299,18 +415,13 @@ fn select(
     here: &Path,
     selection: &Selection,
     averaged: usize,
+    extensions: Vec<Extension>,
 ) -> Result<StageOutcome, CurriculumError> {
     let history = flapper_ppo::training_log::read_history(&here.join("training.csv"))
         .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
     let last = history.last();
     let iterations = last.map_or(0, |l| l.iteration);
-    let chosen = match selection.best_meeting(&stage.gate) {
-        Some(best) => Some((best, stage.gate.identification_fit_percent.map(|_| true))),
-        None => selection
-            .best_flying(&stage.gate)
-            .filter(|_| stage.gate.identification_fit_percent.is_some() && !stage.gate.identification_required)
-            .map(|b| (b, Some(false))),
-    };
+    let chosen = choose(stage, selection);
     let env_steps = last.map_or(0, |l| l.env_steps);
     let wall_time_s = stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations);
     let Some((best, identification_met)) = chosen else {
@@ -326,6 +437,7 @@ fn select(
             best_validation_score: best.map(|b| b.score.completed_percent),
             best_validation_rms_m: best.map(|b| b.score.mean_rms_m),
             cpu: crate::machine::cpu_model(),
+            extensions: extensions.clone(),
         };
         return Err(CurriculumError::GateMissed {
             best: format!(
@@ -353,6 +465,7 @@ fn select(
         validation_score: best.score.completed_percent,
         validation_rms_m: best.score.mean_rms_m,
         checkpoint,
+        extensions,
         identification_met,
         glide_fraction: best.glide_fraction,
         cpu: crate::machine::cpu_model(),

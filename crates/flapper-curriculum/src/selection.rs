@@ -177,6 +177,29 @@ impl Selection {
         best(self.rows.iter())
     }
 
+    /// Whether the stage is still learning: the best of its last `window` validations beats the best of
+    /// those before it (more episodes completed, or as many with a mean RMS error at least
+    /// [`IMPROVEMENT_RMS`] smaller). `None` with fewer than `2 window` validations or no improvement.
+    pub fn still_improving(&self, window: usize) -> Option<Improvement> {
+        if window == 0 || self.rows.len() < 2 * window {
+            return None;
+        }
+        let split = self.rows.len() - window;
+        let earlier = best(self.rows[..split].iter())?;
+        let recent = best(self.rows[split..].iter())?;
+        let (e, r) = (&earlier.score, &recent.score);
+        let improving = r.completed_percent > e.completed_percent
+            || (r.completed_percent == e.completed_percent && r.mean_rms_m <= (1.0 - IMPROVEMENT_RMS) * e.mean_rms_m);
+        improving.then_some(Improvement {
+            earlier_iteration: earlier.iteration,
+            earlier_completed_percent: e.completed_percent,
+            earlier_rms_m: e.mean_rms_m,
+            recent_iteration: recent.iteration,
+            recent_completed_percent: r.completed_percent,
+            recent_rms_m: r.mean_rms_m,
+        })
+    }
+
     fn eligible<'a>(&'a self, gate: &'a Gate) -> impl Iterator<Item = &'a Validated> {
         self.rows.iter().filter(|r| {
             meets_flight_bars(gate, r)
@@ -185,6 +208,45 @@ impl Selection {
                     .is_none_or(|bar| meets_identification_bar(r.identification_fit_percent, bar))
         })
     }
+}
+
+/// The share by which a stage's best mean RMS error must fall, at equal completion, to count as learning.
+pub const IMPROVEMENT_RMS: f64 = 0.05;
+
+/// A stage's recent validations beating its earlier ones ([`Selection::still_improving`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Improvement {
+    pub earlier_iteration: usize,
+    pub earlier_completed_percent: f64,
+    pub earlier_rms_m: f64,
+    pub recent_iteration: usize,
+    pub recent_completed_percent: f64,
+    pub recent_rms_m: f64,
+}
+
+impl Improvement {
+    /// In words, for the log and `summary.json`.
+    pub fn describe(&self, window: usize) -> String {
+        format!(
+            "still improving: the best of the last {window} validations (iteration {}: {:.1}% completed, RMS {:.3} m) beats the best before them (iteration {}: {:.1}%, {:.3} m)",
+            self.recent_iteration,
+            self.recent_completed_percent,
+            self.recent_rms_m,
+            self.earlier_iteration,
+            self.earlier_completed_percent,
+            self.earlier_rms_m
+        )
+    }
+}
+
+/// A stage given more iterations because it was still learning when its budget ran out, as
+/// `stageK/extensions.json` and `summary.json` record it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Extension {
+    /// The stage's budget when it ran out, and the iterations added to it.
+    pub at_iteration: usize,
+    pub added_iterations: usize,
+    pub reason: String,
 }
 
 /// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked
@@ -241,6 +303,9 @@ pub struct StageOutcome {
     pub validation_rms_m: f64,
     /// The selected checkpoint, relative to the curriculum folder.
     pub checkpoint: PathBuf,
+    /// The budget extensions the stage was given (none: absent).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extensions: Vec<Extension>,
     /// Whether the selected checkpoint met the gate's identification bar; absent where the gate has
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -272,6 +337,9 @@ pub struct StoppedStage {
     pub best_validation_score: Option<f64>,
     pub best_validation_rms_m: Option<f64>,
     pub cpu: Option<String>,
+    /// The budget extensions it was given before it stopped (none: absent).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extensions: Vec<Extension>,
 }
 
 /// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the
@@ -304,6 +372,26 @@ mod tests {
             glide_fraction: None,
             identification_fit_percent: None,
         }
+    }
+
+    #[test]
+    fn a_stage_is_still_improving_when_its_recent_best_beats_its_earlier_best() {
+        let rows = |scores: &[(usize, f64)]| Selection {
+            rows: scores.iter().enumerate().map(|(k, &(c, rms))| row(100 * (k + 1), c, rms)).collect(),
+            columns: GateColumns::default(),
+        };
+        // More completed in the last 2 than ever before.
+        let climbing = rows(&[(3, 0.9), (6, 0.8), (5, 0.7), (7, 0.6)]);
+        let improvement = climbing.still_improving(2).expect("7 of 10 beats 6 of 10");
+        assert_eq!((improvement.recent_iteration, improvement.earlier_iteration), (400, 200));
+        assert!(improvement.describe(2).contains("iteration 400: 70.0%"), "{}", improvement.describe(2));
+        // As many completed, the error 10% smaller: improving; 2% smaller: not.
+        assert!(rows(&[(8, 0.50), (8, 0.52), (8, 0.45), (7, 0.5)]).still_improving(2).is_some());
+        assert!(rows(&[(8, 0.50), (8, 0.52), (8, 0.49), (7, 0.5)]).still_improving(2).is_none());
+        // A plateau or a decline is not improving; too few validations say nothing.
+        assert!(rows(&[(9, 0.5), (6, 0.6), (8, 0.5), (9, 0.5)]).still_improving(2).is_none());
+        assert!(rows(&[(3, 0.9), (6, 0.8), (7, 0.7)]).still_improving(2).is_none());
+        assert!(climbing.still_improving(0).is_none());
     }
 
     #[test]

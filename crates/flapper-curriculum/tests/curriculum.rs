@@ -175,6 +175,64 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
 }
 
 #[test]
+fn a_stage_still_improving_when_its_budget_runs_out_is_extended_and_the_summary_says_why() {
+    let dir = scratch("extended");
+    let text = TINY
+        .replacen("max_iterations = 4\nvalidate_every = 2", "max_iterations = 8\nvalidate_every = 1", 1)
+        .replacen("gate = { completed_percent = 0 }", "gate = { completed_percent = 100 }", 1);
+    let first = run(&dir, &text, None).unwrap_err();
+    assert!(first.contains("missed its gate"), "{first}");
+    // Its validations as they were, then the last four made better than the first four: a stage still
+    // learning when its budget ran out.
+    let path = stage_dir(&dir, 1).join("selection.csv");
+    let mut reader = csv::Reader::from_path(&path).unwrap();
+    let headers = reader.headers().unwrap().clone();
+    let mut rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 8, "one validation per iteration");
+    let column = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    let (percent, completed) = (column("completed_percent"), column("cruise_completed"));
+    assert!(rows.iter().all(|r| r[percent].parse::<f64>().unwrap() < 100.0), "the test needs the gate unmet");
+    for (k, row) in rows.iter_mut().enumerate() {
+        let (p, c) = if k < 4 { ("0", "0") } else { ("50", "1") };
+        *row = row
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                if i == percent {
+                    p
+                } else if i == completed {
+                    c
+                } else {
+                    v
+                }
+            })
+            .collect();
+    }
+    let mut writer = csv::Writer::from_path(&path).unwrap();
+    writer.write_record(&headers).unwrap();
+    rows.iter().for_each(|r| writer.write_record(r).unwrap());
+    writer.flush().unwrap();
+
+    let second = run(&dir, &text, None).unwrap_err();
+    assert!(second.contains("missed its gate"), "nothing completes every episode: {second}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let stopped = &summary["stopped"];
+    let extensions = stopped["extensions"].as_array().expect("the extension is recorded");
+    assert!((1..=2).contains(&extensions.len()), "{summary}");
+    assert_eq!(extensions[0]["at_iteration"], 8, "{summary}");
+    assert_eq!(extensions[0]["added_iterations"], 4, "half the stage's budget: {summary}");
+    let reason = extensions[0]["reason"].as_str().unwrap();
+    assert!(reason.contains("still improving") && reason.contains("50.0%"), "{reason}");
+    let trained = stopped["iterations"].as_u64().unwrap();
+    assert_eq!(trained, 8 + extensions.iter().map(|e| e["added_iterations"].as_u64().unwrap()).sum::<u64>());
+    assert!(stage_dir(&dir, 1).join(format!("checkpoints/iter_{trained:06}.safetensors")).exists());
+    let third = run(&dir, &text, None).unwrap_err();
+    assert_eq!(third, second, "running again reports the same, without training more");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_sought_not_required() {
     let dir = scratch("identification");
     let gate = "gate = { completed_percent = 0, min_iterations = 4, identification_fit_percent = 80 }";

@@ -280,6 +280,7 @@ fn policy_loss(
 
 /// The (clipped) value loss of the samples `rows` (its sum, not yet divided by the minibatch size)
 /// and its gradient for the critic, scaled by the value-loss coefficient.
+#[allow(clippy::too_many_arguments)]
 fn value_loss(
     policy: &ActorCritic,
     config: &PpoConfig,
