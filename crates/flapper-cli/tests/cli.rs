@@ -580,7 +580,7 @@ fn eval_writes_what_the_policy_saw_and_did() {
 #[test]
 fn export_policy_writes_c_with_its_size_and_latency_and_refuses_bad_input_with_one_line() {
     let dir = scratch("export-c");
-    let policy = shipped_policy("stage1");
+    let policy = shipped_policy("history/stage1");
     let out = dir.join("stage1_policy.c");
     let output = flapper(&["export-policy", "--policy", &policy, "--format", "c", "--out", out.to_str().unwrap()]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
