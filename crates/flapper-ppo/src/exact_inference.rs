@@ -82,7 +82,7 @@ fn lanes(chunk: &[f32]) -> [f32; LANES] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The same sum written the slow way: lane l holds the inputs i with i mod 8 = l, in order.
@@ -94,8 +94,9 @@ mod tests {
         ((p[0] + p[4]) + (p[2] + p[6])) + ((p[1] + p[5]) + (p[3] + p[7]))
     }
 
-    fn values(n: usize, seed: u32) -> Vec<f32> {
-        // Spread over many magnitudes, so that the summation order shows in the last bits.
+    /// `n` test values spread over many magnitudes, so that a summation order shows in the last bits (also
+    /// what `fixed_matmul`'s tests multiply).
+    pub(crate) fn values(n: usize, seed: u32) -> Vec<f32> {
         (0..n as u32)
             .map(|i| {
                 let h = (i.wrapping_mul(2_654_435_761) ^ seed.wrapping_mul(40_503)).rotate_left(13);

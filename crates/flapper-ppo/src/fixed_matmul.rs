@@ -479,17 +479,7 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn values(n: usize, seed: u32) -> Vec<f32> {
-        // Spread over many magnitudes, so that any change of order or rounding shows in the last bits.
-        (0..n as u32)
-            .map(|i| {
-                let h = (i.wrapping_mul(2_654_435_761) ^ seed.wrapping_mul(40_503)).rotate_left(13);
-                let mantissa = (h % 20_001) as f32 / 10_000.0 - 1.0;
-                mantissa * [1e-3, 1.0, 30.0][(h % 3) as usize]
-            })
-            .collect()
-    }
+    use crate::exact_inference::tests::values;
 
     /// Every vector path this CPU has, and the portable one, give the same bits as the rule written
     /// out, for shapes with and without ragged edges, each start, and a transposed left operand.
