@@ -2,6 +2,10 @@
 
 use rayon::prelude::*;
 
+/// Parameters per slice handed to a thread wherever the learner works on parameters element by element
+/// (Adam, the chunks' gradient sum): large enough to amortize handing out, small enough to balance.
+pub(crate) const PARAMETER_SLICE: usize = 8192;
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Adam {
     pub learning_rate: f32,
@@ -45,14 +49,12 @@ impl Adam {
                 *p -= step_size * *m / ((*v / correction2).sqrt() + eps);
             }
         };
-        /// Parameters per slice handed to a thread.
-        const SLICE: usize = 8192;
         if threads >= 2 {
             params
-                .par_chunks_mut(SLICE)
-                .zip(grads.par_chunks(SLICE))
-                .zip(self.first_moment.par_chunks_mut(SLICE))
-                .zip(self.second_moment.par_chunks_mut(SLICE))
+                .par_chunks_mut(PARAMETER_SLICE)
+                .zip(grads.par_chunks(PARAMETER_SLICE))
+                .zip(self.first_moment.par_chunks_mut(PARAMETER_SLICE))
+                .zip(self.second_moment.par_chunks_mut(PARAMETER_SLICE))
                 .for_each(update);
         } else {
             update((((params, grads), &mut self.first_moment[..]), &mut self.second_moment[..]));

@@ -9,6 +9,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
+use crate::adam::PARAMETER_SLICE;
 use crate::config::PpoConfig;
 use crate::mlp::Workspace;
 
@@ -32,8 +33,6 @@ impl Gradients {
     /// Sets each gradient to the sum of `parts`' (`((p0 + p1) + p2) + ...`, in the order given), the
     /// parameters shared out over `threads` threads in slices: each element's sum is the same in any slice.
     fn add_in_order(&mut self, parts: &[&Gradients], threads: usize) {
-        /// Parameters per slice: large enough to amortize handing out, small enough to balance.
-        const SLICE: usize = 8192;
         let (first, rest) = parts.split_first().expect("at least one chunk");
         for (which, out) in [&mut self.actor, &mut self.critic, &mut self.log_std].into_iter().enumerate() {
             let sum_slice = |start: usize, out: &mut [f32]| {
@@ -45,7 +44,9 @@ impl Gradients {
                 }
             };
             if threads >= 2 {
-                out.par_chunks_mut(SLICE).enumerate().for_each(|(s, slice)| sum_slice(s * SLICE, slice));
+                out.par_chunks_mut(PARAMETER_SLICE)
+                    .enumerate()
+                    .for_each(|(s, slice)| sum_slice(s * PARAMETER_SLICE, slice));
             } else {
                 sum_slice(0, out);
             }
