@@ -19,6 +19,10 @@ pub enum CurriculumError {
         "'{dir}' holds a curriculum started with other settings ({what} differs from its curriculum.toml); continue it with the same settings or choose another folder"
     )]
     OtherSettings { dir: PathBuf, what: &'static str },
+    #[error(
+        "'{dir}' has started stage {stage} ('{name}') with other settings than the curriculum given; a folder continues only with the stages it has started unchanged (later ones may change): continue it with its curriculum.toml or choose another folder"
+    )]
+    StartedStageChanged { dir: PathBuf, stage: usize, name: String },
     #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
     Busy(PathBuf),
     #[error(

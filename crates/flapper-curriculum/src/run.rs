@@ -123,7 +123,11 @@ pub fn stage_dir(dir: &Path, number: usize) -> PathBuf {
     dir.join(format!("stage{number}"))
 }
 
-/// Saves the curriculum in a new folder, or checks that a folder's saved one is the same.
+/// Saves the curriculum in a new folder, or checks a folder's saved one against it. A folder continues
+/// with a changed curriculum as long as nothing it has started would train or be judged differently:
+/// the same seed and budget, and every stage that has a folder here (finished or not) exactly as saved,
+/// shared `[runner]` and `[ppo]` included. Later stages may change, be added or be removed; the saved
+/// curriculum is then kept as `curriculum.replaced-N.toml` and the new one saved in its place.
 fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig, CurriculumError> {
     let file = |path: &Path, e: &dyn std::fmt::Display| CurriculumError::File {
         path: path.to_owned(),
@@ -135,16 +139,44 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
         if saved.seed != config.seed {
             return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "the seed" });
         }
-        if saved != *config {
-            return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "the curriculum config" });
+        if saved == *config {
+            return Ok(saved);
         }
-        return Ok(saved);
+        if saved.max_env_steps != config.max_env_steps {
+            return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "max_env_steps" });
+        }
+        let started = (1..=saved.stages.len()).filter(|&k| stage_dir(dir, k).exists()).max().unwrap_or(0);
+        for number in 1..=started {
+            if !same_stage(&saved, config, number) {
+                return Err(CurriculumError::StartedStageChanged {
+                    dir: dir.to_owned(),
+                    stage: number,
+                    name: saved.stages[number - 1].name.clone(),
+                });
+            }
+        }
+        let replaced = (1..).map(|n| dir.join(format!("curriculum.replaced-{n}.toml"))).find(|p| !p.exists());
+        let replaced = replaced.expect("some number is free");
+        std::fs::copy(&saved_path, &replaced).map_err(|e| file(&replaced, &e))?;
+        checkpoint::write_atomically(&saved_path, config.to_toml().as_bytes())?;
+        return Ok(config.clone());
     }
     if dir.read_dir().is_ok_and(|mut entries| entries.any(|e| e.is_ok_and(|e| e.file_name() != ".lock"))) {
         return Err(CurriculumError::NotACurriculum(dir.to_owned()));
     }
     checkpoint::write_atomically(&saved_path, config.to_toml().as_bytes())?;
     Ok(config.clone())
+}
+
+/// Whether stage `number` trains and is judged the same under both curricula (its own entry and the
+/// training config the shared tables make of it).
+fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool {
+    let Some(stage) = b.stages.get(number - 1) else { return false };
+    *stage == a.stages[number - 1]
+        && match (a.stage_train_config(number), b.stage_train_config(number)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
 }
 
 /// The folder's lock (`.lock`, released by the OS when the process ends).

@@ -419,3 +419,38 @@ fn the_runs_step_budget_shortens_a_stage_and_stops_one_it_leaves_too_little() {
         std::fs::remove_dir_all(dir).unwrap();
     }
 }
+
+#[test]
+fn a_folder_continues_with_changed_later_stages_and_refuses_a_changed_started_one() {
+    // Stage 1 alone, then the curriculum with stage 2 changed (not started): it continues, and stage 1
+    // is what it was.
+    let dir = scratch("changed-later");
+    assert_eq!(run(&dir, TINY, Some(1)).unwrap(), 1);
+    let stage1_before = without_timing(&stage_dir(&dir, 1).join("selection.csv"));
+    let changed = TINY.replace("start_noise_std = 0.8", "start_noise_std = 0.6");
+    assert_eq!(run(&dir, &changed, None).unwrap(), 2);
+    assert_eq!(without_timing(&stage_dir(&dir, 1).join("selection.csv")), stage1_before);
+    let saved = CurriculumConfig::load(&dir.join("curriculum.toml")).unwrap();
+    assert_eq!(saved.stages[1].start_noise_std, Some(0.6), "the new curriculum is saved");
+    let replaced = CurriculumConfig::load(&dir.join("curriculum.replaced-1.toml")).unwrap();
+    assert_eq!(replaced.stages[1].start_noise_std, Some(0.8), "the old one is kept");
+
+    // A third stage appended: trained from stage 2's hand-over; stages 1 and 2 read back.
+    let third = format!(
+        "{changed}\n[[stages]]\nname = \"more\"\nmax_iterations = 2\nvalidate_every = 1\nvalidation = {{ references = [\"cruise\"], episodes = 1 }}\ngate = {{ completed_percent = 0 }}\ntask = {{ stage = 2 }}\n"
+    );
+    let stage2_before = without_timing(&stage_dir(&dir, 2).join("training.csv"));
+    assert_eq!(run(&dir, &third, None).unwrap(), 3);
+    assert_eq!(without_timing(&stage_dir(&dir, 2).join("training.csv")), stage2_before);
+    assert!(dir.join("curriculum.replaced-2.toml").exists());
+
+    // A started stage changed (here stage 2, and a shared [ppo] key that every stage trains with) is
+    // refused naming the stage, and the saved curriculum stays.
+    let saved_text = std::fs::read_to_string(dir.join("curriculum.toml")).unwrap();
+    let e = run(&dir, &third.replace("start_noise_std = 0.6", "start_noise_std = 0.7"), None).unwrap_err();
+    assert!(e.contains("stage 2 ('climb and dive')"), "{e}");
+    let e = run(&dir, &third.replace("minibatches = 2", "minibatches = 4"), None).unwrap_err();
+    assert!(e.contains("stage 1 ('cruise')"), "{e}");
+    assert_eq!(std::fs::read_to_string(dir.join("curriculum.toml")).unwrap(), saved_text);
+    std::fs::remove_dir_all(dir).unwrap();
+}
