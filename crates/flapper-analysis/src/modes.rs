@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flapper_eval::spectrum::fundamental;
-use flapper_eval::tracking::{TrackingController, TrackingStep, energy_per_metre_j, evaluate_tracking};
+use flapper_eval::tracking::{EpisodeResult, TrackingController, TrackingStep, energy_per_metre_j, evaluate_tracking};
 use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
@@ -86,12 +86,14 @@ impl FlightModes {
     }
 }
 
-/// Flies the longitudinal reference once from its exact start and measures each segment; writes nothing.
-pub fn measure_flight_modes(
+/// Flies the longitudinal reference once from its exact start with `controller` (the policy, or the
+/// scripted gait for comparison), as far as it gets (the scripted gait falls behind in the climb; its
+/// energy per metre is still what evaluation compares with).
+pub fn longitudinal_from_exact_start(
     robot: &RobotModel,
-    policy: Arc<ActorCritic>,
+    controller: &TrackingController,
     task: &TaskConfig,
-) -> Result<FlightModes, AnalysisError> {
+) -> Result<EpisodeResult, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -99,7 +101,16 @@ pub fn measure_flight_modes(
     let dt_s = exact.control_period_s(robot.timestep_s());
     let lookahead_s = exact.observation.lookahead_steps as f64 * dt_s;
     let reference = Arc::new(named("longitudinal", NAMED_START_M, dt_s, lookahead_s).expect("a named reference"));
-    let flight = evaluate_tracking(robot, &TrackingController::Policy(policy), &exact, reference, 1, 1)?.remove(0);
+    Ok(evaluate_tracking(robot, controller, &exact, reference, 1, 1)?.remove(0))
+}
+
+/// Flies the longitudinal reference once from its exact start and measures each segment; writes nothing.
+pub fn measure_flight_modes(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+) -> Result<FlightModes, AnalysisError> {
+    let flight = longitudinal_from_exact_start(robot, &TrackingController::Policy(policy), task)?;
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);
         return Err(AnalysisError::FlightFailed {
@@ -108,6 +119,7 @@ pub fn measure_flight_modes(
             time_s: at,
         });
     }
+    let dt_s = task.control_period_s(robot.timestep_s());
     let flap = ActuatedJoint::FlapLeft.index();
     let flap_angles: Vec<f64> = flight.steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
     let held = held_wings(&flap_angles, dt_s);

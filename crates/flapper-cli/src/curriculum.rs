@@ -86,8 +86,11 @@ fn report_progress(event: Progress) {
                 .iter()
                 .map(|r| format!("{} {}/{} {:.2} m", r.name, r.completed, r.episodes, r.mean_rms_m))
                 .collect();
-            let glide = match row.glide_fraction {
-                Some(share) => format!("; glide fraction {share:.2}"),
+            let glide = match row.modes {
+                Some(f) => format!(
+                    "; glide fraction {:.2}, energy {:.2} x scripted, cruise flap {:.2} Hz",
+                    f.glide_fraction, f.energy_ratio, f.cruise_flap_hz
+                ),
                 None => String::new(),
             };
             let identified = match row.identification_fit_percent {
@@ -117,7 +120,11 @@ fn report_progress(event: Progress) {
             outcome.selected_iteration,
             outcome.validation_score,
             outcome.validation_rms_m,
-            outcome.glide_fraction.map_or(String::new(), |share| format!(", glide fraction {share:.2}")),
+            match (outcome.glide_fraction, outcome.energy_ratio, outcome.cruise_flap_hz) {
+                (Some(glide), Some(energy), Some(hz)) =>
+                    format!(", glide fraction {glide:.2}, energy {energy:.2} x scripted, cruise flap {hz:.2} Hz"),
+                _ => String::new(),
+            },
             match outcome.identification_met {
                 Some(false) =>
                     "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",

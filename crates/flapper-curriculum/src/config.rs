@@ -203,6 +203,15 @@ pub struct Gate {
     /// checkpoint that does not fly the reference to its end does not glide (NaN in the table).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub glide_fraction: Option<f64>,
+    /// The energy per metre of the same flight at most this many times the scripted gait's from the
+    /// same start ([`crate::flight_modes`]): the paper's energy term, "gliding instead of flapping when
+    /// possible", as a bar the stage selects on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_energy_ratio: Option<f64>,
+    /// The flap's fundamental in the same flight's cruise segment within this range (Hz): the paper's
+    /// 7 Hz filter "limit[s] the viable flapping frequencies to 4-6 Hz".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cruise_flap_hz: Option<[f64; 2]>,
     /// The gate is not looked at before this iteration (a stage that just met it may still improve).
     #[serde(default)]
     pub min_iterations: usize,
@@ -221,6 +230,8 @@ impl Gate {
             identification_fit_percent: None,
             identification_required: false,
             glide_fraction: None,
+            max_energy_ratio: None,
+            cruise_flap_hz: None,
             min_iterations: 0,
         }
     }
@@ -300,6 +311,19 @@ impl CurriculumConfig {
             }
             if g.glide_fraction.is_some_and(|share| !(0.0..=1.0).contains(&share)) {
                 return Err(bad(format!("gate.glide_fraction is a share in [0, 1], got {:?}", g.glide_fraction)));
+            }
+            if g.max_energy_ratio.is_some_and(|ratio| !(ratio > 0.0 && ratio.is_finite())) {
+                return Err(bad(format!(
+                    "gate.max_energy_ratio must be a positive ratio, got {:?}",
+                    g.max_energy_ratio
+                )));
+            }
+            if let Some([low, high]) = g.cruise_flap_hz
+                && !(low > 0.0 && low < high && high.is_finite())
+            {
+                return Err(bad(format!(
+                    "gate.cruise_flap_hz is a range [low, high] of frequencies with 0 < low < high, got [{low}, {high}]"
+                )));
             }
             if g.identification_required && g.identification_fit_percent.is_none() {
                 return Err(bad(
@@ -724,6 +748,10 @@ task = { stage = 3 }
         assert!(e.contains("identification_fit_percent") && e.contains("-5"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, glide_fraction = 1.5 }");
         assert!(e.contains("gate.glide_fraction") && e.contains("1.5"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, max_energy_ratio = -1.0 }");
+        assert!(e.contains("gate.max_energy_ratio") && e.contains("-1"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, cruise_flap_hz = [6.0, 4.0] }");
+        assert!(e.contains("gate.cruise_flap_hz") && e.contains("[6, 4]"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, identification_required = true }");
         assert!(e.contains("identification_required") && e.contains("identification_fit_percent"), "{e}");
         let second = "validation = { references = [\"longitudinal\"], procedural = 1, episodes = 1 }";

@@ -8,7 +8,7 @@
 pub mod config;
 pub mod error;
 pub mod figure;
-pub mod glide;
+pub mod flight_modes;
 pub mod identification;
 pub mod machine;
 pub mod overlay;

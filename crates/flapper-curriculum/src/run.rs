@@ -25,7 +25,7 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::error::CurriculumError;
 use crate::figure::write_curriculum_figure;
-use crate::glide::glide_fraction;
+use crate::flight_modes::{ModeFigures, flight_mode_figures, gate_asks_flight_modes};
 use crate::identification::identification_fit_percent;
 use crate::selection::{
     Extension, GateColumns, Selection, StageOutcome, StoppedStage, Validated, meets_flight_bars,
@@ -411,8 +411,8 @@ fn judged_file(iteration: usize, averaged: usize) -> PathBuf {
     }
 }
 
-/// Flies the validation set with the checkpoint at `path`, and the longitudinal reference for its glide
-/// where the gate has a glide bar; where the gate asks for identification and the checkpoint meets
+/// Flies the validation set with the checkpoint at `path`, and the longitudinal reference for its flight
+/// modes where the gate has a flight-mode bar; where the gate asks for identification and the checkpoint meets
 /// every other bar, identifies its closed loop.
 fn judge(
     robot: &RobotModel,
@@ -424,12 +424,8 @@ fn judge(
 ) -> Result<Validated, ValidationError> {
     let began = Instant::now();
     let score = set.judge(robot, path)?;
-    let glide_fraction = match gate.glide_fraction {
-        Some(_) => Some(glide_fraction(robot, path)?),
-        None => None,
-    };
-    let mut row =
-        Validated { iteration, env_steps, validation_s: 0.0, score, glide_fraction, identification_fit_percent: None };
+    let modes = if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path)?) } else { None };
+    let mut row = Validated { iteration, env_steps, validation_s: 0.0, score, modes, identification_fit_percent: None };
     if gate.identification_fit_percent.is_some() && meets_flight_bars(gate, &row) {
         row.identification_fit_percent = Some(identification_fit_percent(robot, path)?);
     }
@@ -478,7 +474,7 @@ fn select(
                 best.map_or(0.0, |b| b.score.completed_percent),
                 best.map_or(f64::NAN, |b| b.score.mean_rms_m),
                 describe_rms_bars(&stage.gate, selection),
-                describe_glide(&stage.gate, selection),
+                describe_flight_modes(&stage.gate, selection),
                 describe_identified(selection)
             ),
             dir: here.to_owned(),
@@ -499,7 +495,9 @@ fn select(
         checkpoint,
         extensions,
         identification_met,
-        glide_fraction: best.glide_fraction,
+        glide_fraction: best.modes.map(|f| f.glide_fraction),
+        energy_ratio: best.modes.map(|f| f.energy_ratio),
+        cruise_flap_hz: best.modes.map(|f| f.cruise_flap_hz),
         cpu: crate::machine::cpu_model(),
     };
     let selected = here.join("selected.json");
@@ -530,22 +528,44 @@ fn describe_rms_bars(gate: &Gate, selection: &Selection) -> String {
     if closest.is_empty() { String::new() } else { format!("; {}", closest.join(", ")) }
 }
 
-/// The largest glide fraction any checkpoint flew (from the gate's `min_iterations` on), for the missed
-/// gate's message.
-fn describe_glide(gate: &Gate, selection: &Selection) -> String {
-    let Some(bar) = gate.glide_fraction else { return String::new() };
-    let best = selection
+/// The closest any checkpoint came to each flight-mode bar (from the gate's `min_iterations` on): the
+/// largest glide fraction, the smallest energy ratio, the cruise flap frequency nearest the range; for
+/// the missed gate's message.
+fn describe_flight_modes(gate: &Gate, selection: &Selection) -> String {
+    let rows: Vec<(usize, ModeFigures)> = selection
         .rows
         .iter()
         .filter(|r| r.iteration >= gate.min_iterations)
-        .filter_map(|r| Some((r.iteration, r.glide_fraction.filter(|share| share.is_finite())?)))
-        .max_by(|a, b| a.1.total_cmp(&b.1));
-    match best {
-        Some((iteration, share)) => {
-            format!("; glide fraction {share:.2} at best (iteration {iteration}; bar {bar})")
-        }
-        None => format!("; no checkpoint flew the longitudinal reference for its glide (bar {bar})"),
+        .filter_map(|r| Some((r.iteration, r.modes?)))
+        .collect();
+    let closest = |value: &dyn Fn(&ModeFigures) -> f64, distance: &dyn Fn(f64) -> f64| {
+        rows.iter()
+            .map(|(iteration, f)| (*iteration, value(f)))
+            .filter(|(_, x)| x.is_finite())
+            .min_by(|a, b| distance(a.1).total_cmp(&distance(b.1)))
+    };
+    let never = "no checkpoint flew the longitudinal reference to its end";
+    let mut parts = Vec::new();
+    if let Some(bar) = gate.glide_fraction {
+        parts.push(match closest(&|f| f.glide_fraction, &|x| -x) {
+            Some((at, x)) => format!("glide fraction {x:.2} at best (iteration {at}; bar {bar})"),
+            None => format!("{never} for its glide (bar {bar})"),
+        });
     }
+    if let Some(bar) = gate.max_energy_ratio {
+        parts.push(match closest(&|f| f.energy_ratio, &|x| x) {
+            Some((at, x)) => format!("energy {x:.2} x the scripted gait's at best (iteration {at}; bar {bar} x)"),
+            None => format!("{never} for its energy (bar {bar} x)"),
+        });
+    }
+    if let Some([low, high]) = gate.cruise_flap_hz {
+        let outside = |x: f64| (low - x).max(x - high).max(0.0);
+        parts.push(match closest(&|f| f.cruise_flap_hz, &outside) {
+            Some((at, x)) => format!("cruise flap {x:.2} Hz at closest (iteration {at}; bar {low}-{high} Hz)"),
+            None => format!("{never} for its flap frequency (bar {low}-{high} Hz)"),
+        });
+    }
+    parts.iter().map(|p| format!("; {p}")).collect()
 }
 
 /// The identified checkpoints of a stage in words (x, y, z fit of each), for the missed gate's message.
@@ -589,6 +609,14 @@ pub fn describe_gate(gate: &Gate) -> String {
         text.push_str(&format!(
             ", the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
         ));
+    }
+    if let Some(ratio) = gate.max_energy_ratio {
+        text.push_str(&format!(
+            ", the energy per metre along the longitudinal reference at most {ratio} x the scripted gait's"
+        ));
+    }
+    if let Some([low, high]) = gate.cruise_flap_hz {
+        text.push_str(&format!(", the flap's fundamental in its cruise segment within {low}-{high} Hz"));
     }
     if let Some(fit) = gate.identification_fit_percent {
         let how =

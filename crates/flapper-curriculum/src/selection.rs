@@ -7,7 +7,7 @@ use flapper_analysis::sysid::AXES;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Gate;
-use crate::glide::meets_glide_bar;
+use crate::flight_modes::{ModeFigures, gate_asks_flight_modes, meets_flight_mode_bars};
 use crate::identification::meets_identification_bar;
 use crate::validation::{ReferenceScore, Score};
 
@@ -19,9 +19,9 @@ pub struct Validated {
     /// Seconds spent judging it: flying the validation set, and identifying it where asked.
     pub validation_s: f64,
     pub score: Score,
-    /// The share of the longitudinal reference's glide segment flown with the wings held
-    /// ([`crate::glide`]): `None` where the gate asks for no glide, NaN where the flight failed.
-    pub glide_fraction: Option<f64>,
+    /// The flight along the longitudinal reference: glide, energy and flap frequency
+    /// ([`crate::flight_modes`]): `None` where the gate has no flight-mode bar, NaN where the flight failed.
+    pub modes: Option<ModeFigures>,
     /// Per axis x, y, z, the fit (percent) of its identified closed loop
     /// ([`crate::identification`]): `None` where not identified (the gate asks for no identification,
     /// or the checkpoint missed the gate's other bars), NaN where it could not be identified.
@@ -44,15 +44,15 @@ pub struct Selection {
 /// The columns a table has beyond the validation set's, from its stage's gate.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GateColumns {
-    /// `glide_fraction` (the gate has a glide bar).
-    pub glide: bool,
+    /// `glide_fraction`, `energy_ratio`, `cruise_flap_hz` (the gate has a flight-mode bar).
+    pub modes: bool,
     /// `identification_<axis>_fit_percent` (the gate has an identification bar).
     pub identification: bool,
 }
 
 impl GateColumns {
     pub fn of(gate: &Gate) -> Self {
-        Self { glide: gate.glide_fraction.is_some(), identification: gate.identification_fit_percent.is_some() }
+        Self { modes: gate_asks_flight_modes(gate), identification: gate.identification_fit_percent.is_some() }
     }
 }
 
@@ -94,9 +94,17 @@ impl Selection {
                     })
                 })
                 .collect::<Result<Vec<_>, SelectionError>>()?;
-            let glide_column = FIXED.len() + 3 * references.len();
-            let glide_fraction = if columns.glide { Some(number(glide_column)?) } else { None };
-            let first_fit = glide_column + usize::from(columns.glide);
+            let modes_column = FIXED.len() + 3 * references.len();
+            let modes = if columns.modes {
+                Some(ModeFigures {
+                    glide_fraction: number(modes_column)?,
+                    energy_ratio: number(modes_column + 1)?,
+                    cruise_flap_hz: number(modes_column + 2)?,
+                })
+            } else {
+                None
+            };
+            let first_fit = modes_column + if columns.modes { MODE_COLUMNS.len() } else { 0 };
             let identification_fit_percent = match record.get(first_fit) {
                 Some(text) if columns.identification && !text.is_empty() => {
                     Some([number(first_fit)?, number(first_fit + 1)?, number(first_fit + 2)?])
@@ -108,7 +116,7 @@ impl Selection {
                 env_steps: number(1)? as u64,
                 validation_s: number(4)?,
                 score: Score { completed_percent: number(2)?, mean_rms_m: number(3)?, references },
-                glide_fraction,
+                modes,
                 identification_fit_percent,
             });
         }
@@ -128,8 +136,9 @@ impl Selection {
             for r in &row.score.references {
                 values.extend([r.completed.to_string(), r.episodes.to_string(), r.mean_rms_m.to_string()]);
             }
-            if self.columns.glide {
-                values.push(row.glide_fraction.unwrap_or(f64::NAN).to_string());
+            if self.columns.modes {
+                let f = row.modes.unwrap_or(ModeFigures::NOT_FLOWN);
+                values.extend([f.glide_fraction, f.energy_ratio, f.cruise_flap_hz].map(|x| x.to_string()));
             }
             if self.columns.identification {
                 match row.identification_fit_percent {
@@ -250,11 +259,9 @@ pub struct Extension {
 }
 
 /// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked
-/// at only then): its iteration, its validation score and its glide.
+/// at only then): its iteration, its validation score and its flight modes.
 pub fn meets_flight_bars(gate: &Gate, row: &Validated) -> bool {
-    row.iteration >= gate.min_iterations
-        && row.score.meets(gate)
-        && gate.glide_fraction.is_none_or(|bar| meets_glide_bar(row.glide_fraction, bar))
+    row.iteration >= gate.min_iterations && row.score.meets(gate) && meets_flight_mode_bars(gate, row.modes.as_ref())
 }
 
 fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
@@ -265,17 +272,20 @@ fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> 
 }
 
 /// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`,
-/// then a table with a glide bar has `glide_fraction`, and one with identification ends with
+/// then a table with a flight-mode bar has [`MODE_COLUMNS`], and one with identification ends with
 /// `identification_<axis>_fit_percent` for x, y and z.
 const FIXED: [&str; 5] = ["iteration", "env_steps", "completed_percent", "mean_rms_m", "validation_s"];
+
+/// The flight-mode columns ([`ModeFigures`]).
+const MODE_COLUMNS: [&str; 3] = ["glide_fraction", "energy_ratio", "cruise_flap_hz"];
 
 fn header(references: &[String], gate_columns: GateColumns) -> Vec<String> {
     let mut columns: Vec<String> = FIXED.iter().map(|c| c.to_string()).collect();
     for name in references {
         columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
     }
-    if gate_columns.glide {
-        columns.push("glide_fraction".to_owned());
+    if gate_columns.modes {
+        columns.extend(MODE_COLUMNS.map(String::from));
     }
     if gate_columns.identification {
         columns.extend(AXES.map(|axis| format!("identification_{axis}_fit_percent")));
@@ -310,9 +320,14 @@ pub struct StageOutcome {
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification_met: Option<bool>,
-    /// The selected checkpoint's glide fraction ([`crate::glide`]); absent where the gate has no glide bar.
+    /// The selected checkpoint's flight modes ([`crate::flight_modes`]): its glide fraction, energy ratio
+    /// and cruise flap frequency; absent where the gate has no flight-mode bar.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub glide_fraction: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cruise_flap_hz: Option<f64>,
     /// The CPU that finished the stage ([`crate::machine::cpu_model`]): training reproduces row for row
     /// on this CPU model, not on every one. Absent in runs recorded before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -369,7 +384,7 @@ mod tests {
             env_steps: iteration as u64 * 100,
             validation_s: 1.5,
             score,
-            glide_fraction: None,
+            modes: None,
             identification_fit_percent: None,
         }
     }
@@ -437,9 +452,10 @@ mod tests {
             columns: GateColumns::of(&gate),
         };
         assert!(!selection.gate_met(&gate) && selection.best_flying(&gate).is_none(), "nothing measured");
-        selection.rows[0].glide_fraction = Some(f64::NAN);
-        selection.rows[1].glide_fraction = Some(0.49);
-        selection.rows[2].glide_fraction = Some(0.62);
+        let glide = |share: f64| Some(ModeFigures { glide_fraction: share, energy_ratio: 1.2, cruise_flap_hz: 5.3 });
+        selection.rows[0].modes = glide(f64::NAN);
+        selection.rows[1].modes = glide(0.49);
+        selection.rows[2].modes = glide(0.62);
         assert_eq!(
             selection.best_meeting(&gate).unwrap().iteration,
             30,
@@ -464,25 +480,25 @@ mod tests {
         assert_eq!(back.rows, selection.rows);
         let e = Selection::read(&path, &["loop".to_owned()], none).unwrap_err().to_string();
         assert!(e.contains("selection.csv") && e.contains("loop_completed"), "{e}");
-        let identification = GateColumns { glide: false, identification: true };
+        let identification = GateColumns { modes: false, identification: true };
         let e = Selection::read(&path, &names, identification).unwrap_err().to_string();
         assert!(e.contains("identification_x_fit_percent"), "a table without the identification columns: {e}");
-        let e = Selection::read(&path, &names, GateColumns { glide: true, identification: false }).unwrap_err();
-        assert!(e.to_string().contains("glide_fraction"), "a table without the glide column: {e}");
+        let e = Selection::read(&path, &names, GateColumns { modes: true, identification: false }).unwrap_err();
+        assert!(e.to_string().contains("glide_fraction"), "a table without the flight-mode columns: {e}");
         let mut identified = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], columns: identification };
         identified.rows[1].identification_fit_percent = Some([81.25, 79.5, 90.0]);
         identified.write(&path, &names).unwrap();
         let back = Selection::read(&path, &names, identification).unwrap();
         assert_eq!(back.rows, identified.rows, "fits where identified, none where not");
-        let both = GateColumns { glide: true, identification: true };
+        let both = GateColumns { modes: true, identification: true };
         let mut glided = Selection { columns: both, ..identified.clone() };
-        glided.rows[0].glide_fraction = Some(0.125);
-        glided.rows[1].glide_fraction = Some(0.75);
+        glided.rows[0].modes = Some(ModeFigures { glide_fraction: 0.125, energy_ratio: 4.75, cruise_flap_hz: 6.25 });
+        glided.rows[1].modes = Some(ModeFigures { glide_fraction: 0.75, energy_ratio: 1.5, cruise_flap_hz: 5.3 });
         glided.write(&path, &names).unwrap();
         let back = Selection::read(&path, &names, both).unwrap();
-        assert_eq!(back.rows, glided.rows, "the glide column between the references and the fits");
+        assert_eq!(back.rows, glided.rows, "the flight-mode columns between the references and the fits");
         let header = std::fs::read_to_string(&path).unwrap().lines().next().unwrap().to_owned();
-        assert!(header.ends_with("cruise_rms_m,glide_fraction,identification_x_fit_percent,identification_y_fit_percent,identification_z_fit_percent"), "{header}");
+        assert!(header.ends_with("cruise_rms_m,glide_fraction,energy_ratio,cruise_flap_hz,identification_x_fit_percent,identification_y_fit_percent,identification_z_fit_percent"), "{header}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -286,19 +286,22 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
 }
 
 #[test]
-fn a_glide_bar_measures_every_checkpoint_and_stops_a_stage_that_never_glides() {
+fn flight_mode_bars_measure_every_checkpoint_and_stop_a_stage_that_never_glides() {
     let dir = scratch("glide");
-    let gate = "gate = { completed_percent = 0, glide_fraction = 0.5 }";
+    let gate =
+        "gate = { completed_percent = 0, glide_fraction = 0.5, max_energy_ratio = 1.5, cruise_flap_hz = [4.0, 6.0] }";
     let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
     // Four iterations cannot fly the longitudinal reference: no checkpoint glides, the stage stops.
     let e = run(&dir, &text, None).unwrap_err();
     assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("glide segment (flapper modes)"), "{e}");
-    assert!(e.contains("no checkpoint flew the longitudinal reference for its glide (bar 0.5)"), "{e}");
+    assert!(e.contains("no checkpoint flew the longitudinal reference to its end for its glide (bar 0.5)"), "{e}");
+    assert!(e.contains("for its energy (bar 1.5 x)") && e.contains("for its flap frequency (bar 4-6 Hz)"), "{e}");
+    assert!(e.contains("at most 1.5 x the scripted gait's") && e.contains("within 4-6 Hz"), "the gate in words: {e}");
     let table = std::fs::read_to_string(stage_dir(&dir, 1).join("selection.csv")).unwrap();
     let rows: Vec<&str> = table.lines().collect();
-    assert!(rows[0].ends_with(",cruise_rms_m,glide_fraction"), "{table}");
+    assert!(rows[0].ends_with(",cruise_rms_m,glide_fraction,energy_ratio,cruise_flap_hz"), "{table}");
     assert_eq!(rows.len(), 3, "a row per validated checkpoint: {table}");
-    assert!(rows[1..].iter().all(|row| row.ends_with(",NaN")), "not flown to its end: NaN: {table}");
+    assert!(rows[1..].iter().all(|row| row.ends_with(",NaN,NaN,NaN")), "not flown to its end: NaN: {table}");
     assert_eq!(run(&dir, &text, None).unwrap_err(), e, "read back, the table gives the same verdict");
     std::fs::remove_dir_all(&dir).unwrap();
     // A bar of 0 is met by any flight that ends, not by one that fails: it still stops.
