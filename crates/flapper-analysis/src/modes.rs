@@ -92,6 +92,16 @@ pub fn measure_flight_modes(
     policy: Arc<ActorCritic>,
     task: &TaskConfig,
 ) -> Result<FlightModes, AnalysisError> {
+    measure_controller_flight_modes(robot, &TrackingController::Policy(policy), task)
+}
+
+/// [`measure_flight_modes`] for any controller that tracks a reference (the scripted gait too, on
+/// its own task).
+pub fn measure_controller_flight_modes(
+    robot: &RobotModel,
+    controller: &TrackingController,
+    task: &TaskConfig,
+) -> Result<FlightModes, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
@@ -99,7 +109,7 @@ pub fn measure_flight_modes(
     let dt_s = exact.control_period_s(robot.timestep_s());
     let lookahead_s = exact.observation.lookahead_steps as f64 * dt_s;
     let reference = Arc::new(named("longitudinal", NAMED_START_M, dt_s, lookahead_s).expect("a named reference"));
-    let flight = evaluate_tracking(robot, &TrackingController::Policy(policy), &exact, reference, 1, 1)?.remove(0);
+    let flight = evaluate_tracking(robot, controller, &exact, reference, 1, 1)?.remove(0);
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);
         return Err(AnalysisError::FlightFailed {
