@@ -10,9 +10,12 @@
 //!   about them checked;
 //! - [`modes`]: flight modes along the longitudinal reference (does the policy glide?);
 //! - [`robustness`]: success rates under randomized fluid coefficients, constant winds and all of
-//!   Table III, and the level-flight airspeed envelope (paper Fig. 8-9).
+//!   Table III, and the level-flight airspeed envelope (paper Fig. 8-9);
+//! - [`frontier`]: energy against tracking per controller (the efficient-bird trade-off), with the
+//!   glide fraction, the cruise flap frequency and slow level flight.
 
 pub mod fit;
+pub mod frontier;
 pub mod linear_system;
 pub mod modes;
 pub mod phase;
@@ -38,4 +41,11 @@ pub enum AnalysisError {
     FitFailed,
     #[error("cannot write '{path}': {message}")]
     Write { path: std::path::PathBuf, message: String },
+    #[error("cannot read '{path}': {message}")]
+    Read { path: std::path::PathBuf, message: String },
+    /// A row of a trade-off file (`frontier.csv`, or points measured elsewhere) that does not parse.
+    #[error("'{path}' line {line}: {message}")]
+    FrontierFile { path: std::path::PathBuf, line: u64, message: String },
+    #[error(transparent)]
+    Reference(#[from] flapper_task::reference::ReferenceError),
 }

@@ -110,7 +110,17 @@ pub fn measure_flight_modes(
     policy: Arc<ActorCritic>,
     task: &TaskConfig,
 ) -> Result<FlightModes, AnalysisError> {
-    let flight = longitudinal_from_exact_start(robot, &TrackingController::Policy(policy), task)?;
+    measure_controller_flight_modes(robot, &TrackingController::Policy(policy), task)
+}
+
+/// [`measure_flight_modes`] for any controller that tracks a reference (the scripted gait too, on
+/// its own task).
+pub fn measure_controller_flight_modes(
+    robot: &RobotModel,
+    controller: &TrackingController,
+    task: &TaskConfig,
+) -> Result<FlightModes, AnalysisError> {
+    let flight = longitudinal_from_exact_start(robot, controller, task)?;
     if !flight.completed() {
         let at = flight.steps.last().map_or(0.0, |s| s.time_s);
         return Err(AnalysisError::FlightFailed {

@@ -13,6 +13,7 @@ mod eval;
 mod export_policy;
 mod flag_values;
 mod fly;
+mod frontier;
 mod modes;
 mod output_dir;
 mod pendulum;
@@ -68,6 +69,11 @@ enum Command {
     /// Flight modes on the longitudinal reference: flap amplitude, frequency and power in the cruise,
     /// climb, glide and dive segments, and whether the policy glides; modes.json, modes.svg.
     Modes(modes::ModesArgs),
+    /// Energy against tracking (the efficient-bird trade-off): each policy and the scripted gait on
+    /// longitudinal (energy per metre over the scripted gait's on the same starts, RMS error), with the
+    /// glide fraction, the cruise flap frequency and the level 3.0 m/s path; a table, frontier.csv and
+    /// energy_vs_tracking.svg.
+    Frontier(frontier::FrontierArgs),
     /// Robustness sweeps (paper Fig. 8-9) on one reference: success as each fluid coefficient (and all
     /// five) is randomized over wider ranges, under constant winds, with all of Table III at once, and
     /// the level-flight airspeed envelope; robustness_fluid.csv, robustness_wind.csv, robustness.json,
@@ -149,6 +155,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Sysid(args) => sysid::run(args, model),
         Command::Phase(args) => phase::run(args, model),
         Command::Modes(args) => modes::run(args, model),
+        Command::Frontier(args) => frontier::run(args, model),
         Command::Robustness(args) => robustness::run(args, model),
         Command::Report(args) => report::run(args, model),
         Command::Render(args) => render::run(args, model),

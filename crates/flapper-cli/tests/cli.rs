@@ -370,6 +370,7 @@ fn a_negative_number_is_refused_naming_its_flag() {
         (&["robustness", "--policy", p, "--out", o], &["--episodes", "--seed", "--ranges"]),
         (&["sysid", "--policy", p, "--out", o], &["--seed", "--amplitude-m", "--input-lead-s", "--averaged-periods"]),
         (&["phase", "--policy", p, "--out", o], &["--speed-mps"]),
+        (&["frontier", "--policy", p, "--out", o], &["--episodes", "--seed"]),
     ];
     for (command, flags) in flags {
         for flag in *flags {
@@ -636,4 +637,85 @@ fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key(
     assert_one_line_error(&output, "flap_amplitud_max");
     assert!(String::from_utf8_lossy(&output.stderr).contains("stage 1"));
     assert!(!out.join("stage1").exists(), "a refused run trains nothing");
+}
+
+/// `flapper frontier --policy policies/final/... --episodes 2 --seed 11`: its longitudinal figures are
+/// `flapper eval`'s (the same library calls on the same starts, at the file's decimals), its energy ratio
+/// is the policy's energy per metre over the scripted gait's, and the scripted gait's own ratio is 1.
+#[test]
+fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ratio_one() {
+    use std::sync::Arc;
+
+    use flapper_analysis::frontier::file::read_frontier_csv;
+    use flapper_eval::tracking::{TrackingController, evaluate_tracking};
+    use flapper_eval::tracking_report::TrackingSummary;
+    use flapper_task::TaskConfig;
+
+    let out = scratch("frontier");
+    let policy = shipped_policy("final");
+    let args = ["frontier", "--policy", &policy, "--episodes", "2", "--seed", "11", "--out", out.to_str().unwrap()];
+    let output = flapper(&args);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.lines().any(|l| l.starts_with("final ") && l.contains("2/2")), "{stdout}");
+    let rows = read_frontier_csv(&out.join("frontier.csv")).unwrap();
+    let labels: Vec<&str> = rows.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["final", "scripted gait"]);
+    let (final_row, scripted_row) = (&rows[0], &rows[1]);
+
+    // `flapper eval --policy P --reference longitudinal --episodes 2 --seed 11`, as eval_command flies it.
+    let robot = flapper_sim::RobotModel::flapper().unwrap();
+    let (actor, task) = flapper_eval::load_flight_policy(std::path::Path::new(&policy)).unwrap();
+    let period_s = task.control_period_s(robot.timestep_s());
+    let reference =
+        Arc::new(flapper_task::reference::resolve("longitudinal", period_s, task.observation.lookahead_steps).unwrap());
+    let eval = |controller: TrackingController, task: &TaskConfig| {
+        let results = evaluate_tracking(&robot, &controller, task, reference.clone(), 2, 11).unwrap();
+        let window = flapper_task::reference::named::manoeuvre_window_s(reference.name());
+        TrackingSummary::of(&results, task.control_period_s(robot.timestep_s()), window)
+    };
+    let by_policy = eval(TrackingController::Policy(Arc::new(actor)), &task);
+    let by_scripted = eval(TrackingController::Scripted(Default::default()), &TaskConfig::default());
+    let at = |decimals: usize, x: f64| Some(format!("{x:.decimals$}").parse::<f64>().unwrap());
+    assert_eq!(final_row.longitudinal_completed, Some(by_policy.completed));
+    assert_eq!(final_row.longitudinal_episodes, Some(2));
+    assert_eq!(final_row.longitudinal_rms_m, at(4, by_policy.mean_rms_error_m));
+    assert_eq!(final_row.longitudinal_j_per_m, at(3, by_policy.energy_per_metre_j));
+    assert_eq!(final_row.scripted_j_per_m, at(3, by_scripted.energy_per_metre_j));
+    assert_eq!(final_row.energy_ratio, at(3, by_policy.energy_per_metre_j / by_scripted.energy_per_metre_j));
+    assert_eq!(scripted_row.longitudinal_completed, Some(by_scripted.completed));
+    assert_eq!(scripted_row.longitudinal_j_per_m, at(3, by_scripted.energy_per_metre_j));
+    assert_eq!(scripted_row.energy_ratio, Some(1.0), "the scripted gait against itself");
+    // The final controller flaps through the glide segment (`flapper modes`: 0.00) and flies the rest.
+    assert_eq!(final_row.glide_fraction, Some(0.0));
+    assert!(final_row.cruise_flap_hz.is_some_and(|hz| (5.0..9.0).contains(&hz)), "{final_row:?}");
+    assert_eq!(final_row.level3_episodes, Some(2));
+    assert!(out.join("energy_vs_tracking.svg").metadata().unwrap().len() > 1000);
+    let svg = std::fs::read_to_string(out.join("energy_vs_tracking.svg")).unwrap();
+    for label in ["final", "scripted gait"] {
+        assert!(svg.lines().any(|line| line.trim() == label), "no point labelled {label}");
+    }
+}
+
+#[test]
+fn frontier_refuses_bad_input_with_one_line_naming_the_flag_or_file() {
+    let out = scratch("frontier-bad");
+    let o = out.to_str().unwrap();
+    let policy = shipped_policy("final");
+    let missing = "/no/such/policy.safetensors";
+    assert_one_line_error(&flapper(&["frontier", "--policy", &policy, "--policy", missing, "--out", o]), missing);
+    let points = out.join("points.csv");
+    std::fs::write(&points, "label,longitudinal_rms_m,energy_ratio,source\nA,0.3,1.5,x\nB,0.2,seven,x\n").unwrap();
+    let p = points.to_str().unwrap();
+    assert_one_line_error(
+        &flapper(&["frontier", "--policy", &policy, "--points", p, "--out", o]),
+        &format!("'{p}' line 3: column 'energy_ratio'"),
+    );
+    assert_one_line_error(&flapper(&["frontier", "--policy", &policy, "--episodes", "0", "--out", o]), "--episodes");
+    assert_one_line_error(
+        &flapper(&["frontier", "--policy", &policy, "--label", "a", "--label", "b", "--out", o]),
+        "--label given 2 times for 1 --policy",
+    );
+    assert_usage_error(&flapper(&["frontier", "--out", o]), "--policy <FILE>");
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1, "a refused command writes nothing");
 }

@@ -85,6 +85,17 @@ pub mod decimals {
     pub fn each_fixed<const DECIMALS: usize, S: Serializer>(values: &[f64], serializer: S) -> Result<S::Ok, S::Error> {
         serializer.collect_seq(values.iter().map(|v| format!("{v:.DECIMALS$}")))
     }
+
+    /// A number that may be missing: empty in a CSV file (which reads back as `None`).
+    pub fn optional_fixed<const DECIMALS: usize, S: Serializer>(
+        value: &Option<f64>,
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        match value {
+            Some(value) => fixed::<DECIMALS, S>(value, serializer),
+            None => serializer.serialize_none(),
+        }
+    }
 }
 
 /// Reads back a JSON file that [`write_json`] wrote, as the type that wrote it; the error says what went

@@ -1,9 +1,14 @@
 //! Line charts as SVG: a figure is a grid of panels, each a set of curves on shared axes. The flight
-//! plots (evaluation) and the learning curves (training) are both drawn with it. Every figure, and
+//! plots (evaluation) and the learning curves (training) are both drawn with it; labelled points with
+//! guide lines ([`draw_scatter`]) show a trade-off, one point per controller. Every figure, and
 //! every other output file flapper writes, goes to disk through [`write_atomically`]: complete or
 //! absent, never half written.
 
 pub use flapper_files::write_atomically;
+
+mod scatter;
+
+pub use scatter::{Guide, LabelledPoint, PointGroup, Scatter, draw_scatter};
 
 use std::path::Path;
 

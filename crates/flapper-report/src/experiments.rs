@@ -1,7 +1,7 @@
 //! The experiments behind the figures, each writing the same files as its own command (`flapper eval`,
-//! `sysid`, `phase`, `modes`, `robustness`) into a folder of the report.
+//! `sysid`, `phase`, `modes`, `robustness`, `frontier`) into a folder of the report.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flapper_analysis::robustness::{
@@ -14,7 +14,7 @@ use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
 use flapper_task::reference::Reference;
 
-use crate::{ReportError, ReportSettings, write_json};
+use crate::{FINAL_POLICY, ReportError, ReportSettings, shipped_file, write_json};
 
 /// The named references flown for the tracking figures (Fig. 3, 8, 10, 11) and the comparison.
 pub const TRACKED_REFERENCES: [&str; 8] =
@@ -157,4 +157,71 @@ pub fn robustness(
     create(dir)?;
     write_robustness(&report, &wind_paths, &reference, dir).map_err(fail)?;
     Ok(())
+}
+
+/// The shipped controllers the energy frontier measures, with their names: the final controller,
+/// every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order) and the
+/// previous stage-4 lineage (`policies/history/stage4`) where it is there.
+pub fn frontier_policies() -> Vec<(String, PathBuf)> {
+    let mut policies = vec![("final".to_owned(), shipped_file(FINAL_POLICY))];
+    let mut experiments: Vec<(String, PathBuf)> = std::fs::read_dir(shipped_file(FRONTIER_EXPERIMENTS))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|entry| (entry.file_name().to_string_lossy().into_owned(), entry.path().join("policy.safetensors")))
+        .filter(|(_, path)| path.is_file())
+        .collect();
+    experiments.sort();
+    policies.extend(experiments);
+    let stage4 = shipped_file(FRONTIER_PREVIOUS_STAGE4);
+    if stage4.is_file() {
+        policies.push(("previous stage-4 lineage".to_owned(), stage4));
+    }
+    policies
+}
+
+/// Where [`frontier_policies`] looks, from the repository's root.
+const FRONTIER_EXPERIMENTS: &str = "policies/experiments";
+const FRONTIER_PREVIOUS_STAGE4: &str = "policies/history/stage4/policy.safetensors";
+/// Points measured in experiments, drawn beside the report's own.
+pub const FRONTIER_POINTS: &str = "docs/energy-frontier.csv";
+
+/// `flapper frontier` on [`frontier_policies`] with the report's episodes and seed, and
+/// [`FRONTIER_POINTS`] as points measured elsewhere: `frontier.csv`, `energy_vs_tracking.svg`.
+/// Returns what could not be measured (notes).
+pub fn frontier(
+    robot: &RobotModel,
+    settings: &ReportSettings,
+    dir: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<String>, ReportError> {
+    use flapper_analysis::frontier::file::read_frontier_csv;
+    use flapper_analysis::frontier::{FrontierPolicy, FrontierSettings, LEVEL_3_REFERENCE, measure_frontier};
+    let fail = |e: &dyn std::fmt::Display| ReportError::step("energy frontier", e);
+    let policies = frontier_policies()
+        .into_iter()
+        .map(|(label, path)| FrontierPolicy::load(label, &path))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| fail(&e))?;
+    let points_file = shipped_file(FRONTIER_POINTS);
+    let mut notes = Vec::new();
+    let points = if points_file.is_file() {
+        read_frontier_csv(&points_file).map_err(|e| fail(&e))?
+    } else {
+        notes.push(format!("energy frontier without the points measured in experiments: no {FRONTIER_POINTS}"));
+        Vec::new()
+    };
+    let frontier_settings = FrontierSettings {
+        episodes: settings.episodes,
+        seed: settings.seed,
+        level_reference: shipped_file(LEVEL_3_REFERENCE),
+    };
+    let frontier = measure_frontier(robot, &policies, &frontier_settings, &|done: &str| {
+        progress(&format!("energy frontier: {done}"))
+    })
+    .map_err(|e| fail(&e))?;
+    notes.extend(frontier.notes.iter().map(|note| format!("energy frontier: {note}")));
+    create(dir)?;
+    flapper_analysis::frontier::write_frontier_files(dir, &frontier, &points).map_err(|e| fail(&e))?;
+    Ok(notes)
 }

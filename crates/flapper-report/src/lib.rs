@@ -1,6 +1,6 @@
 //! The report, last in the flow: every experiment behind the paper's figures run with the shipped
 //! policies (tracking on the named references, system identification, phase portraits, robustness
-//! sweeps), rendered snapshots and a flight video, and one page (`index.html`, `report.md`) that
+//! sweeps, the energy frontier of every shipped controller), rendered snapshots and a flight video, and one page (`index.html`, `report.md`) that
 //! shows them beside the paper's numbers ([`paper`]). Every number on the page is read back from the
 //! JSON files the run wrote, as the types that wrote them ([`results`]).
 
@@ -88,11 +88,18 @@ pub struct ReportOutcome {
 }
 
 /// The folders a report writes (beside index.html, report.md and paper_vs_flapper.csv).
-const REPORT_PARTS: [&str; 8] = ["tracking", "sysid", "phase", "modes", "robustness", "render", "training", "tables"];
+const REPORT_PARTS: [&str; 9] =
+    ["tracking", "sysid", "phase", "modes", "frontier", "robustness", "render", "training", "tables"];
 
 /// How many times [`generate`] calls its progress callback (for a progress bar).
 pub fn step_count(settings: &ReportSettings) -> usize {
-    TRACKED_REFERENCES.len() + 3 + results::ROBUSTNESS_REFERENCES.len() + if settings.pictures { 2 } else { 0 } + 1
+    let frontier = flapper_analysis::frontier::step_count(experiments::frontier_policies().len());
+    TRACKED_REFERENCES.len()
+        + 3
+        + frontier
+        + results::ROBUSTNESS_REFERENCES.len()
+        + if settings.pictures { 2 } else { 0 }
+        + 1
 }
 
 /// Runs everything and writes the report into `out` (which must exist). `progress` is called after
@@ -146,6 +153,7 @@ pub fn generate(
     progress("phase portraits");
     experiments::modes(robot, policy.clone(), &task, &out.join("modes"))?;
     progress("flight modes");
+    notes.extend(experiments::frontier(robot, settings, &out.join("frontier"), progress)?);
     // The level-flight envelope does not depend on the reference: the first one measures it for all.
     for (k, name) in results::ROBUSTNESS_REFERENCES.into_iter().enumerate() {
         let envelope = k == 0;

@@ -66,6 +66,7 @@ fn sections(input: &PageInput) -> Vec<Section> {
         fig9_fluid(),
         fig10_11_manoeuvres(),
         tracking(results),
+        energy_frontier(results, settings),
         tables_ii_iii(results),
         training(results),
     ]
@@ -359,6 +360,32 @@ fn tracking(results: &RunResults) -> Section {
             ),
         ],
     }
+}
+
+/// The efficient-bird trade-off: energy against tracking for every shipped controller.
+fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
+    use flapper_analysis::frontier::{ENERGY_RATIO_BAR, TRACKING_BAR_M};
+    let caption = format!(
+        "Energy against tracking on the longitudinal reference, one point per controller: the energy per metre \
+         (absolute mechanical work over the distance flown) over the scripted gait's on the same randomized starts \
+         (so the scripted gait sits at 1, the lower dashed line), against the mean RMS position error. Filled: \
+         measured by this run ({} starts, seed {}: `flapper frontier` on the final controller, every \
+         policies/experiments controller and the previous stage-4 lineage); rings: measured in experiments \
+         (docs/energy-frontier.csv, each row's source names the command). The other dashed lines are the \
+         efficient-bird bars: at most {ENERGY_RATIO_BAR} x the scripted gait's energy and at most {TRACKING_BAR_M} m \
+         RMS error; a controller that meets both lies below and left of them.",
+        settings.episodes, settings.seed
+    );
+    let mut blocks = vec![figure(&caption, "frontier/energy_vs_tracking.svg")];
+    let rows = results.frontier.as_deref().unwrap_or_default();
+    let (mut header, cells) = flapper_analysis::frontier::table(rows);
+    header.push("source".into());
+    let cells = cells.into_iter().zip(rows).map(|(mut cells, row)| {
+        cells.push(row.source.clone());
+        cells
+    });
+    blocks.push(Block::Table(header, cells.collect()));
+    Section { title: "Energy against tracking (the efficient bird)".into(), blocks }
 }
 
 /// Tables II and III as the run used them.

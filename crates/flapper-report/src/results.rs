@@ -5,6 +5,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use flapper_analysis::frontier::FrontierRow;
+use flapper_analysis::frontier::file::read_frontier_csv;
 use flapper_analysis::modes::ModesReport;
 use flapper_analysis::phase::PhaseReport;
 use flapper_analysis::robustness::RobustnessReport;
@@ -25,6 +27,8 @@ pub mod files {
     pub const MODES: &str = "modes/modes.json";
     pub const TABLES: &str = "tables/tables.json";
     pub const TRAINING: &str = "training/training.json";
+    /// The energy frontier's rows (`flapper frontier`'s frontier.csv).
+    pub const FRONTIER: &str = "frontier/frontier.csv";
 
     /// `flapper eval`'s figures on one named reference.
     pub fn tracking(reference: &str) -> String {
@@ -46,6 +50,7 @@ pub struct RunResults {
     pub robustness: BTreeMap<String, RobustnessReport>,
     pub tables: Option<ModelTables>,
     pub training: Option<TrainingTable>,
+    pub frontier: Option<Vec<FrontierRow>>,
 }
 
 impl RunResults {
@@ -65,6 +70,7 @@ impl RunResults {
                 .collect(),
             tables: read(out, files::TABLES),
             training: read(out, files::TRAINING),
+            frontier: read_frontier_csv(&out.join(files::FRONTIER)).ok(),
         }
     }
 

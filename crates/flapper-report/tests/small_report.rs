@@ -12,8 +12,8 @@ fn repository() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// The files behind the paper's figures (Fig. 1-3, 5-11) and the learning curves.
-const FIGURES: [&str; 16] = [
+/// The files behind the paper's figures (Fig. 1-3, 5-11), the learning curves and the energy frontier.
+const FIGURES: [&str; 17] = [
     "tracking/cruise/joints.svg",
     "sysid/pole_zero.svg",
     "sysid/bode.svg",
@@ -30,6 +30,7 @@ const FIGURES: [&str; 16] = [
     "modes/modes.svg",
     "training/stage1_learning_curves.svg",
     "training/stage3_learning_curves.svg",
+    "frontier/energy_vs_tracking.svg",
 ];
 const PICTURES: [&str; 6] = [
     "render/robot.png",
@@ -121,5 +122,25 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         "an analysis does not read back"
     );
     assert!(results.tables.is_some() && results.training.is_some(), "the tables do not read back");
+    // The frontier: every shipped controller and the scripted gait measured with the report's episodes,
+    // then the points of docs/energy-frontier.csv, each with its source.
+    let frontier = results.frontier.expect("frontier.csv reads back");
+    let measured: Vec<&str> =
+        frontier.iter().filter(|r| r.longitudinal_episodes == Some(1)).map(|r| r.label.as_str()).collect();
+    let mut expected = vec!["final".to_owned()];
+    let mut experiments: Vec<String> = std::fs::read_dir(root.join("policies/experiments"))
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.path().join("policy.safetensors").is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    experiments.sort();
+    expected.extend(experiments);
+    expected.extend(["previous stage-4 lineage".to_owned(), "scripted gait".to_owned()]);
+    assert_eq!(measured, expected);
+    let points = flapper_analysis::frontier::file::read_frontier_csv(&root.join("docs/energy-frontier.csv")).unwrap();
+    assert_eq!(frontier[measured.len()..], points[..], "the points follow the measured rows");
+    assert_eq!(frontier[measured.len() - 1].energy_ratio, Some(1.0));
+    assert!(html.contains("Energy against tracking") && html.contains("efficient-bird bars"), "no frontier section");
     std::fs::remove_dir_all(&out).unwrap();
 }
