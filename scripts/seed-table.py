@@ -2,12 +2,15 @@
 """The seed study of the one-command curriculum: judge each finished `flapper curriculum` run folder
 against the final controller's bars and write the table `policies/final/seeds.csv` asks for.
 
-    scripts/seed-table.py --out seeds.csv RUN_DIR [RUN_DIR ...] [--robustness] [--sysid]
+    scripts/seed-table.py --out seeds.csv RUN_DIR [RUN_DIR ...] [--robustness] [--sysid] [--frontier]
 
 For every folder (its `summary.json` and `policy.safetensors`): the eight named references flown from 100
 starts with seed 11 (`flapper eval --no-baseline`), and with --robustness the sweeps behind the robustness
 bars (`flapper robustness --sweeps fluid,table3 --ranges 0.3 --episodes 100 --seed 1` on lateral and
-longitudinal), with --sysid the identified closed loop's validation fit (`flapper sysid`). Columns:
+longitudinal), with --sysid the identified closed loop's validation fit (`flapper sysid`), with --frontier
+the efficient-bird figures (`flapper frontier --episodes 100 --seed 11`: energy per metre on longitudinal over
+the scripted gait's on the same starts, the glide fraction of its glide segment, the cruise flap frequency,
+level 3 m/s completed and RMS). Columns:
 seed, total_env_steps, total_wall_time_s, <reference>_completed (of 100), <reference>_rms_m, then
 nominal_bars_met and the optional robustness and sysid columns. A run that stopped at a missed gate (a
 summary, no policy) is a row of its own with empty flight columns and no bar met (its steps and time include
@@ -101,12 +104,36 @@ def sysid(policy, scratch):
     return row
 
 
+# The efficient-bird issue's bars: energy on longitudinal at most 1.5 x the scripted gait's, the glide
+# segment at least half glided, the cruise flap fundamental within the paper's 4-6 Hz, level 3 m/s at 0.5 m.
+FRONTIER_COLUMNS = ["energy_ratio", "glide_fraction", "cruise_flap_hz", "level3_completed", "level3_rms_m"]
+
+
+def frontier(policy, scratch):
+    out = scratch / "frontier"
+    flapper(["frontier", "--policy", str(policy), "--episodes", "100", "--seed", "11"], out)
+    measured = next(csv.DictReader(open(out / "frontier.csv")))
+    row = {key: (float(measured[key]) if measured[key] not in ("", "NaN") else None) for key in FRONTIER_COLUMNS}
+    row["level3_completed"] = None if row["level3_completed"] is None else int(row["level3_completed"])
+    for key in ["energy_ratio", "glide_fraction", "cruise_flap_hz", "level3_rms_m"]:
+        if row[key] is not None:
+            row[key] = round(row[key], 3)
+    row["efficiency_bars_met"] = (
+        row["energy_ratio"] is not None and row["energy_ratio"] <= 1.5
+        and row["glide_fraction"] is not None and row["glide_fraction"] >= 0.5
+        and row["cruise_flap_hz"] is not None and 4.0 <= row["cruise_flap_hz"] <= 6.0
+    )
+    return row
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", nargs="+", type=Path, help="finished `flapper curriculum` folders")
     parser.add_argument("--out", type=Path, required=True, help="the table to write (CSV; must not exist)")
     parser.add_argument("--robustness", action="store_true", help="also the robustness bars (~3 min a seed)")
     parser.add_argument("--sysid", action="store_true", help="also the identification bar (~1 min a seed)")
+    parser.add_argument("--frontier", action="store_true",
+                        help="also energy ratio, glide fraction, cruise flap Hz and level 3 m/s (~1 min a seed)")
     args = parser.parse_args()
     if args.out.exists():
         sys.exit(f"seed-table: '{args.out}' exists; choose another --out (nothing was overwritten)")
@@ -140,6 +167,8 @@ def main():
                 row.update(robustness(policy, Path(scratch)))
             if args.sysid:
                 row.update(sysid(policy, Path(scratch)))
+            if args.frontier:
+                row.update(frontier(policy, Path(scratch)))
         print(", ".join(f"{k} {v}" for k, v in row.items()), flush=True)
         rows.append(row)
     columns = max((list(row.keys()) for row in rows), key=len)
