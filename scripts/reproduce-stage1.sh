@@ -4,12 +4,13 @@
 # AVX2 and FMA and on any thread count (docs/training.md, "Training that reproduces on any CPU and thread
 # count"); about 2-3 minutes on 2 cores.
 #   scripts/reproduce-stage1.sh [RECORDED_DIR]
-# RECORDED_DIR holds summary.json and stage1/training.csv; the default is the curriculum run recorded with
-# today's training arithmetic (docs/runs/seed3/). The shipped policies/final was trained with the arithmetic
-# before it (gemm): it reproduces only on the CPU model that trained it.
+# RECORDED_DIR holds summary.json and stage1/training.csv; the default is the shipped final controller's run
+# (policies/final, seed 1, the fixed arithmetic). docs/runs/seed3/ is another such record; the previous final
+# controller (policies/history/previous-final) was trained with the arithmetic before it (gemm) and reproduces
+# only on the CPU model that trained it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-recorded=${1:-$root/docs/runs/seed3}
+recorded=${1:-$root/policies/final}
 for file in summary.json stage1/training.csv; do
     if [[ ! -f "$recorded/$file" ]]; then
         echo "error: $recorded/$file not found (RECORDED_DIR must hold a curriculum run's summary.json and stage1/)" >&2

@@ -160,8 +160,9 @@ pub fn robustness(
 }
 
 /// The shipped controllers the energy frontier measures, with their names: the final controller,
-/// every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order) and the
-/// previous stage-4 lineage (`policies/history/stage4`) where it is there.
+/// every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the previous
+/// final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic) and the
+/// previous stage-4 lineage (`policies/history/stage4`) where they are there.
 pub fn frontier_policies() -> Vec<(String, PathBuf)> {
     let mut policies = vec![("final".to_owned(), shipped_file(FINAL_POLICY))];
     let mut experiments: Vec<(String, PathBuf)> = std::fs::read_dir(shipped_file(FRONTIER_EXPERIMENTS))
@@ -173,15 +174,20 @@ pub fn frontier_policies() -> Vec<(String, PathBuf)> {
         .collect();
     experiments.sort();
     policies.extend(experiments);
-    let stage4 = shipped_file(FRONTIER_PREVIOUS_STAGE4);
-    if stage4.is_file() {
-        policies.push(("previous stage-4 lineage".to_owned(), stage4));
+    for (label, file) in
+        [("previous final", FRONTIER_PREVIOUS_FINAL), ("previous stage-4 lineage", FRONTIER_PREVIOUS_STAGE4)]
+    {
+        let path = shipped_file(file);
+        if path.is_file() {
+            policies.push((label.to_owned(), path));
+        }
     }
     policies
 }
 
 /// Where [`frontier_policies`] looks, from the repository's root.
 const FRONTIER_EXPERIMENTS: &str = "policies/experiments";
+const FRONTIER_PREVIOUS_FINAL: &str = "policies/history/previous-final/policy.safetensors";
 const FRONTIER_PREVIOUS_STAGE4: &str = "policies/history/stage4/policy.safetensors";
 /// Points measured in experiments, drawn beside the report's own.
 pub const FRONTIER_POINTS: &str = "docs/energy-frontier.csv";
