@@ -555,16 +555,23 @@ task = { stage = 2 }
     #[test]
     fn the_shipped_curriculum_reads_and_fits_the_papers_budget() {
         let c = shipped("curriculum.toml");
-        assert_eq!(task_stages(&c), [1, 2, 3, 4], "the paper's four stages in order");
+        assert_eq!(task_stages(&c), [1, 2, 3, 4, 4], "the paper's four stages in order, then the efficient flight");
+        let efficient = c.stage_train_config(5).unwrap();
+        assert!(efficient.ppo.smoothness_coef > 0.0 && efficient.task.reference.glide_probability > 0.0);
+        let gate = &c.stages[4].gate;
+        assert!(gate.max_energy_ratio.is_some() && gate.cruise_flap_hz == Some([4.0, 6.0]));
+        assert_eq!(c.stages[4].validation, c.stages[3].validation, "judged on stage 4's validation set");
         check_budget(&c, "curriculum.toml");
     }
 
     #[test]
     fn the_experiments_build_on_the_shipped_curriculum_and_read() {
         // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
-        // each one's section): stages 1-4 are the shipped ones by construction, and each must still read
-        // and check after any change to the curriculum it builds on.
-        let four = shipped("curriculum.toml");
+        // each one's section): stages 1-4 are the shipped ones by construction (the ones run before the
+        // fifth stage shipped leave it out), and each must still read and check after any change to the
+        // curriculum it builds on.
+        let five = shipped("curriculum.toml");
+        let four = CurriculumConfig { stages: five.stages[..4].to_vec(), ..five.clone() };
         let flight_modes = shipped("experiments/curriculum-flight-modes.toml");
         assert_eq!(task_stages(&flight_modes), [1, 2, 3, 4, 4]);
         assert!(flight_modes.stages[..4] == four.stages[..] && flight_modes.max_env_steps == four.max_env_steps);
@@ -648,6 +655,13 @@ task = { stage = 3 }
         assert_eq!(again, CurriculumConfig { seed: 6, ..c.clone() });
         assert!(!again.to_toml().contains("extends"));
         assert_eq!(CurriculumConfig::from_toml(&again.to_toml(), "saved").unwrap(), again);
+        // A stage of the base left out by name; the rest as they were.
+        let fewer = "extends = \"more.toml\"\n[[stages]]\nremove = \"first again\"\n";
+        std::fs::write(dir.join("experiments/fewer.toml"), fewer).unwrap();
+        let fewer = CurriculumConfig::load(&dir.join("experiments/fewer.toml")).unwrap();
+        let names: Vec<&str> = fewer.stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["cruise", "climb and dive", "last"]);
+        assert!(fewer.stages[1] == c.stages[2] && fewer.stages[2] == c.stages[3]);
     }
 
     #[test]
@@ -660,9 +674,9 @@ task = { stage = 3 }
         };
         let e = refused("missing", "extends = \"../nowhere.toml\"\n");
         assert!(e.contains("extends '../nowhere.toml'") && e.contains("cannot be read"), "{e}");
-        for key in ["modify", "from", "after"] {
+        for key in ["modify", "from", "after", "remove"] {
             let entry = match key {
-                "modify" => "modify = \"crusie\"".to_owned(),
+                "modify" | "remove" => format!("{key} = \"crusie\""),
                 _ => format!("name = \"new\"\n{key} = \"crusie\""),
             };
             let e = refused(key, &format!("extends = \"../base.toml\"\n[[stages]]\n{entry}\n"));
@@ -676,6 +690,9 @@ task = { stage = 3 }
         let e =
             refused("in-place", "extends = \"../base.toml\"\n[[stages]]\nmodify = \"cruise\"\nafter = \"cruise\"\n");
         assert!(e.contains("in place"), "{e}");
+        let e =
+            refused("remove-more", "extends = \"../base.toml\"\n[[stages]]\nremove = \"cruise\"\nmax_iterations = 2\n");
+        assert!(e.contains("remove = 'cruise'") && e.contains("no other key"), "{e}");
         let dir = folder(
             "bad-base",
             &[("base.toml", "stages = 5\n"), ("experiments/x.toml", "extends = \"../base.toml\"\n")],

@@ -10,6 +10,9 @@
 //! max_iterations = 400             # its keys replaced by these (tables merged key by key)
 //!
 //! [[stages]]
+//! remove = "efficient flight"      # the base's stage of that name, left out (nothing else in the entry)
+//!
+//! [[stages]]
 //! name = "flight modes"            # a new stage, appended at the end ...
 //! after = "cruise"                 # ... or placed right after the stage of that name
 //! from = "cruise"                  # ... starting as a copy of that stage, these keys over it
@@ -144,7 +147,7 @@ fn edit_stages(stages: &mut Vec<Table>, entry: Value, number: usize, names: &Nam
         Some(Value::String(name)) => Ok(Some(name)),
         Some(other) => Err(bad(format!("{key} must be a stage name, got {other}"))),
     };
-    let (modify, from, after) = (take("modify")?, take("from")?, take("after")?);
+    let (modify, from, after, remove) = (take("modify")?, take("from")?, take("after")?, take("remove")?);
     let find = |key: &'static str, stage: &str| {
         stages.iter().position(|s| s.get("name").and_then(Value::as_str) == Some(stage)).ok_or_else(|| {
             let known: Vec<String> =
@@ -159,6 +162,14 @@ fn edit_stages(stages: &mut Vec<Table>, entry: Value, number: usize, names: &Nam
             }
         })
     };
+    if let Some(stage) = remove {
+        if modify.is_some() || from.is_some() || after.is_some() || !entry.is_empty() {
+            return Err(bad(format!("remove = '{stage}' leaves a stage out and takes no other key")));
+        }
+        let at = find("remove", &stage)?;
+        stages.remove(at);
+        return Ok(());
+    }
     if let Some(stage) = modify {
         if from.is_some() || after.is_some() {
             return Err(bad(format!("modify = '{stage}' changes a stage in place; from and after are for new stages")));
