@@ -15,6 +15,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flapper_analysis::AnalysisError;
+use flapper_analysis::frontier;
 use flapper_analysis::modes::{SEGMENTS, longitudinal_from_exact_start, measure_flight_modes};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
@@ -54,8 +55,9 @@ pub fn flight_mode_figures(robot: &RobotModel, checkpoint: &Path) -> Result<Mode
     let scripted =
         longitudinal_from_exact_start(robot, &TrackingController::Scripted(ScriptedGaitConfig::default()), &task)
             .map_err(|e| ValidationError::FlightModes(format!("the scripted gait, for the energy ratio: {e}")))?;
-    let energy_ratio =
-        flapper_eval::tracking::energy_per_metre_j(&modes.steps, period_s) / scripted.energy_per_metre_j(period_s);
+    let own = flapper_eval::tracking::energy_per_metre_j(&modes.steps, period_s);
+    // The ratio as `flapper frontier` takes it; NaN (no bar met) where the scripted gait flew no energy.
+    let energy_ratio = frontier::energy_ratio(own, scripted.energy_per_metre_j(period_s)).unwrap_or(f64::NAN);
     let cruise = SEGMENTS.iter().position(|(name, _, _)| *name == "cruise").expect("the first segment");
     Ok(ModeFigures {
         glide_fraction: modes.glide_segment_fraction(),
