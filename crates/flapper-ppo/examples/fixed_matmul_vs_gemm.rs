@@ -1,6 +1,8 @@
 //! What the fixed arithmetic costs: the training's matrix products (the paper's 540-256-128-64 layers
-//! on a 96-row chunk of a minibatch) through `fixed_matmul::product` and through the `gemm` crate
-//! (CPU-dispatched, the same work), one thread, best of 5 x 200 calls each.
+//! on one chunk of a 1536-sample minibatch: 384 rows, what each of the 4 chunks holds, and 96, a
+//! quarter of one, what a thread computes when 16 threads share the chunks) through
+//! `fixed_matmul::product` and through the `gemm` crate (CPU-dispatched, the same work), one thread,
+//! best of 5 x 200 calls each.
 //!
 //!     cargo run --release -p flapper-ppo --example fixed_matmul_vs_gemm
 //!     FLAPPER_SIMD=avx2 cargo run --release -p flapper-ppo --example fixed_matmul_vs_gemm
@@ -22,14 +24,22 @@ fn best_seconds(mut f: impl FnMut()) -> f64 {
 
 fn main() {
     println!("fixed_matmul on the {} path against gemm, one thread:", Simd::active().name());
+    for rows in [384, 96] {
+        compare(rows);
+    }
+}
+
+/// The products of one forward and backward pass over `rows` samples.
+fn compare(rows: usize) {
     // (what, m, n, k, left operand transposed)
     let products = [
-        ("layer 1 forward      96 x 540 -> 256", 96, 256, 540, false),
-        ("layer 1 weight grad  256 x 540 over 96", 256, 540, 96, true),
-        ("layer 2 forward      96 x 256 -> 128", 96, 128, 256, false),
-        ("layer 2 input grad   96 x 128 -> 256", 96, 256, 128, false),
-        ("layer 2 weight grad  128 x 256 over 96", 128, 256, 96, true),
+        (format!("layer 1 forward      {rows} x 540 -> 256"), rows, 256, 540, false),
+        (format!("layer 1 weight grad  256 x 540 over {rows}"), 256, 540, rows, true),
+        (format!("layer 2 forward      {rows} x 256 -> 128"), rows, 128, 256, false),
+        (format!("layer 2 input grad   {rows} x 128 -> 256"), rows, 256, 128, false),
+        (format!("layer 2 weight grad  128 x 256 over {rows}"), 128, 256, rows, true),
     ];
+    let (mut fixed_total, mut gemm_total) = (0.0, 0.0);
     for (what, m, n, k, transposed) in products {
         let a: Vec<f32> = (0..m * k).map(|i| (i % 17) as f32 * 0.01).collect();
         let b: Vec<f32> = (0..k * n).map(|i| (i % 13) as f32 * 0.01).collect();
@@ -72,5 +82,13 @@ fn main() {
             gflops(gemm),
             fixed / gemm
         );
+        fixed_total += fixed;
+        gemm_total += gemm;
     }
+    println!(
+        "  all five ({rows} rows): fixed {:6.1} us, gemm {:6.1} us, ratio {:.2}",
+        fixed_total * 1e6,
+        gemm_total * 1e6,
+        fixed_total / gemm_total
+    );
 }

@@ -92,11 +92,14 @@ struct Shape {
     k: usize,
 }
 
-/// Terms of `p` taken per sweep over the output by the vector paths: a sweep's slice of `b`
-/// (KC rows of a tile's columns) stays in the L1 cache while every row tile reads it. Each element's
-/// chain goes on where the last sweep stored it: the same operations in the same order.
+/// Terms of `p` taken per sweep over the output by the vector paths. Each element's chain goes on
+/// where the last sweep stored it: the same operations in the same order, whatever the sweep's length.
+/// Where a sweep's columns of `b` are packed (`x86::PACK_FROM_ROW_TILES`), [`KC_PACKED`] keeps the
+/// packed panel (128 x 64 floats, 32 KiB for AVX-512) inside a 48 KiB L1 cache.
 #[cfg(target_arch = "x86_64")]
 const KC: usize = 256;
+#[cfg(target_arch = "x86_64")]
+const KC_PACKED: usize = 128;
 
 /// The vector path that computes [`product`]: a speed, never a result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -231,12 +234,13 @@ mod x86 {
     struct Operands<'a> {
         c: *mut f32,
         a: Strided<'a>,
-        b: &'a [f32],
         shape: Shape,
         start: Start<'a>,
     }
 
-    /// A tile: rows i..i+R, columns j.. (V vectors, `last` lanes of the last), terms `first..end`.
+    /// A tile: rows i..i+R, columns j.. (V vectors, `last` lanes of the last), terms `first..end`;
+    /// `b[p][j..]` read at `panel + (p - first) * panel_stride` (`b` itself, or the sweep's copy of
+    /// the tile's columns packed side by side, [`PACK_FROM_ROW_TILES`]).
     #[derive(Clone, Copy)]
     struct Place {
         i: usize,
@@ -244,6 +248,20 @@ mod x86 {
         last: usize,
         first: usize,
         end: usize,
+        panel: *const f32,
+        panel_stride: usize,
+    }
+
+    /// Row tiles from which a sweep's columns of `b` are first copied into one contiguous panel:
+    /// rows of `b` lie `n` floats apart, and with n a multiple of 256 (1 KiB) the rows of one tile
+    /// fall into a quarter of the L1 cache's sets and evict each other before the next row tile reads
+    /// them again. Packed, the panel is read from L1 by every row tile. The values are the same, so
+    /// the arithmetic is too; only where they are read from changes.
+    const PACK_FROM_ROW_TILES: usize = 24;
+
+    thread_local! {
+        /// Each thread's panel buffer (KC x V x WIDTH floats at most, 64 KiB for AVX-512).
+        static PANEL: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
     }
 
     /// # Safety
@@ -376,7 +394,7 @@ mod x86 {
         unsafe { blocks::<Avx512, 6, 4>(c, a, b, shape, start) }
     }
 
-    /// Covers the output with tiles, in sweeps of [`KC`](super::KC) terms: R rows by V whole vectors
+    /// Covers the output with tiles, in sweeps of [`KC`](super::KC) (or [`KC_PACKED`](super::KC_PACKED)) terms: R rows by V whole vectors
     /// while they fit, then one vector at a time for the columns left (the last one masked).
     #[inline(always)]
     unsafe fn blocks<L: Lanes, const R: usize, const V: usize>(
@@ -387,45 +405,71 @@ mod x86 {
         start: Start,
     ) {
         let Shape { m, n, k } = shape;
-        let mut operands = Operands { c: c.as_mut_ptr(), a, b, shape, start };
-        let mut first = 0;
-        loop {
-            let end = (first + super::KC).min(k);
-            let mut j = 0;
-            while j < n {
-                let whole = j + V * L::WIDTH <= n;
-                let last = if whole { L::WIDTH } else { (n - j).min(L::WIDTH) };
-                let mut i = 0;
-                // SAFETY (every call): the tiles lie inside the shapes `product` checked.
-                while i + R <= m {
-                    let place = Place { i, j, last, first, end };
-                    unsafe { if whole { L::tile::<R, V>(operands, place) } else { L::tile::<R, 1>(operands, place) } };
-                    i += R;
+        let mut operands = Operands { c: c.as_mut_ptr(), a, shape, start };
+        let pack = m / R >= PACK_FROM_ROW_TILES;
+        let sweep = if pack { super::KC_PACKED } else { super::KC };
+        PANEL.with_borrow_mut(|panel| {
+            let mut first = 0;
+            loop {
+                let end = (first + sweep).min(k);
+                let mut j = 0;
+                while j < n {
+                    let whole = j + V * L::WIDTH <= n;
+                    let last = if whole { L::WIDTH } else { (n - j).min(L::WIDTH) };
+                    let columns = if whole { V * L::WIDTH } else { last };
+                    let (panel_ptr, panel_stride) = if pack {
+                        panel.clear();
+                        for p in first..end {
+                            panel.extend_from_slice(&b[p * n + j..p * n + j + columns]);
+                        }
+                        (panel.as_ptr(), columns)
+                    } else {
+                        // SAFETY: row `first`, column j lies inside b ([k x n]).
+                        (unsafe { b.as_ptr().add(first * n + j) }, n)
+                    };
+                    let place = |i| Place { i, j, last, first, end, panel: panel_ptr, panel_stride };
+                    let mut i = 0;
+                    // SAFETY (every call): the tiles lie inside the shapes `product` checked.
+                    while i + R <= m {
+                        unsafe {
+                            if whole {
+                                L::tile::<R, V>(operands, place(i))
+                            } else {
+                                L::tile::<R, 1>(operands, place(i))
+                            }
+                        };
+                        i += R;
+                    }
+                    for i in i..m {
+                        unsafe {
+                            if whole {
+                                L::tile::<1, V>(operands, place(i))
+                            } else {
+                                L::tile::<1, 1>(operands, place(i))
+                            }
+                        };
+                    }
+                    j += columns;
                 }
-                for i in i..m {
-                    let place = Place { i, j, last, first, end };
-                    unsafe { if whole { L::tile::<1, V>(operands, place) } else { L::tile::<1, 1>(operands, place) } };
+                if end == k {
+                    break;
                 }
-                j += if whole { V * L::WIDTH } else { last };
+                // Later sweeps go on with each element's chain where the last one stored it.
+                operands.start = Start::Output;
+                first = end;
             }
-            if end == k {
-                break;
-            }
-            // Later sweeps go on with each element's chain where the last one stored it.
-            operands.start = Start::Output;
-            first = end;
-        }
+        });
     }
 
     /// The tile at `place`: each element's chain over the place's terms, held in registers.
     #[inline(always)]
     unsafe fn tile<L: Lanes, const R: usize, const V: usize>(operands: Operands, place: Place) {
-        let Operands { c: c_ptr, a, b, shape, start } = operands;
-        let Place { i, j, last, first, end } = place;
+        let Operands { c: c_ptr, a, shape, start } = operands;
+        let Place { i, j, last, first, end, panel, panel_stride } = place;
         let n = shape.n;
         let width = |v: usize| if v + 1 == V { last } else { L::WIDTH };
-        // SAFETY: rows i..i+R and columns j..j+(V-1)*WIDTH+last lie inside c ([m x n]), b ([k x n]) and
-        // the bias ([n]); a[i + r][p] lies inside a (checked by `product` for every i < m, p < k).
+        // SAFETY: rows i..i+R and columns j..j+(V-1)*WIDTH+last lie inside c ([m x n]), the panel (terms
+        // first..end of those columns) and the bias ([n]); a[i + r][p] lies inside a (checked by `product`).
         unsafe {
             let mut sums = [[L::zero(); V]; R];
             for (r, row) in sums.iter_mut().enumerate() {
@@ -438,9 +482,8 @@ mod x86 {
                     };
                 }
             }
-            let b_ptr = b.as_ptr();
             for p in first..end {
-                let row = b_ptr.add(p * n + j);
+                let row = panel.add((p - first) * panel_stride);
                 let bs: [L; V] = std::array::from_fn(|v| L::load(row.add(v * L::WIDTH), width(v)));
                 for (r, sums_r) in sums.iter_mut().enumerate() {
                     let x = L::splat(*a.values.get_unchecked((i + r) * a.row_stride + p * a.column_stride));
@@ -485,7 +528,9 @@ mod tests {
     /// out, for shapes with and without ragged edges, each start, and a transposed left operand.
     #[test]
     fn every_vector_path_follows_the_rule_bit_for_bit() {
-        let shapes = [(1, 1, 1), (7, 5, 9), (6, 32, 3), (13, 47, 29), (96, 256, 540), (5, 540, 17), (12, 1, 64)];
+        // (150, 70, 300): enough row tiles that each sweep's columns of b are packed, over 3 sweeps, ragged.
+        let shapes =
+            [(1, 1, 1), (7, 5, 9), (6, 32, 3), (13, 47, 29), (96, 256, 540), (5, 540, 17), (12, 1, 64), (150, 70, 300)];
         for (m, n, k) in shapes {
             for transposed in [false, true] {
                 let a_values = values(m * k, 1);
