@@ -159,12 +159,22 @@ pub fn robustness(
     Ok(())
 }
 
-/// The shipped controllers the energy frontier measures, with their names: the final controller,
-/// every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the previous
+/// The controllers the energy frontier measures, with their names: the report's own policy (`policy`,
+/// named "final" where it is the shipped final controller, else by its file, with the shipped final beside
+/// it), every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the previous
 /// final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic) and the
 /// previous stage-4 lineage (`policies/history/stage4`) where they are there.
-pub fn frontier_policies() -> Vec<(String, PathBuf)> {
-    let mut policies = vec![("final".to_owned(), shipped_file(FINAL_POLICY))];
+pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
+    let final_policy = shipped_file(FINAL_POLICY);
+    let same_file = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    };
+    let mut policies = if same_file(policy, &final_policy) {
+        vec![("final".to_owned(), final_policy)]
+    } else {
+        vec![(policy.display().to_string(), policy.to_owned()), ("final".to_owned(), final_policy)]
+    };
     let mut experiments: Vec<(String, PathBuf)> = std::fs::read_dir(shipped_file(FRONTIER_EXPERIMENTS))
         .into_iter()
         .flatten()
@@ -192,7 +202,7 @@ const FRONTIER_PREVIOUS_STAGE4: &str = "policies/history/stage4/policy.safetenso
 /// Points measured in experiments, drawn beside the report's own.
 pub const FRONTIER_POINTS: &str = "docs/energy-frontier.csv";
 
-/// `flapper frontier` on [`frontier_policies`] with the report's episodes and seed, and
+/// `flapper frontier` on [`frontier_policies`] (the report's policy first) with the report's episodes and seed, and
 /// [`FRONTIER_POINTS`] as points measured elsewhere: `frontier.csv`, `energy_vs_tracking.svg`.
 /// Returns what could not be measured (notes).
 pub fn frontier(
@@ -204,7 +214,7 @@ pub fn frontier(
     use flapper_analysis::frontier::file::read_frontier_csv;
     use flapper_analysis::frontier::{FrontierPolicy, FrontierSettings, LEVEL_3_REFERENCE, measure_frontier};
     let fail = |e: &dyn std::fmt::Display| ReportError::step("energy frontier", e);
-    let policies = frontier_policies()
+    let policies = frontier_policies(&settings.policy)
         .into_iter()
         .map(|(label, path)| FrontierPolicy::load(label, &path))
         .collect::<Result<Vec<_>, _>>()

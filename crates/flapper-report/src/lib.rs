@@ -93,7 +93,7 @@ const REPORT_PARTS: [&str; 9] =
 
 /// How many times [`generate`] calls its progress callback (for a progress bar).
 pub fn step_count(settings: &ReportSettings) -> usize {
-    let frontier = flapper_analysis::frontier::step_count(experiments::frontier_policies().len());
+    let frontier = flapper_analysis::frontier::step_count(experiments::frontier_policies(&settings.policy).len());
     TRACKED_REFERENCES.len()
         + 3
         + frontier

@@ -369,12 +369,14 @@ fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
         "Energy against tracking on the longitudinal reference, one point per controller: the energy per metre \
          (absolute mechanical work over the distance flown) over the scripted gait's on the same randomized starts \
          (so the scripted gait sits at 1, the lower dashed line), against the mean RMS position error. Filled: \
-         measured by this run ({} starts, seed {}: `flapper frontier` on the final controller, every \
-         policies/experiments controller and the previous stage-4 lineage); rings: measured in experiments \
+         measured by this run ({} starts, seed {}: `flapper frontier` on this report's controller ({}), the \
+         shipped final one, every policies/experiments controller and the previous ones); rings: measured in experiments \
          (docs/energy-frontier.csv, each row's source names the command). The other dashed lines are the \
          efficient-bird bars: at most {ENERGY_RATIO_BAR} x the scripted gait's energy and at most {TRACKING_BAR_M} m \
          RMS error; a controller that meets both lies below and left of them.",
-        settings.episodes, settings.seed
+        settings.episodes,
+        settings.seed,
+        settings.policy.display()
     );
     let mut blocks = vec![figure(&caption, "frontier/energy_vs_tracking.svg")];
     let rows = results.frontier.as_deref().unwrap_or_default();

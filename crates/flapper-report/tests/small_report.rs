@@ -122,12 +122,13 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         "an analysis does not read back"
     );
     assert!(results.tables.is_some() && results.training.is_some(), "the tables do not read back");
-    // The frontier: every shipped controller and the scripted gait measured with the report's episodes,
-    // then the points of docs/energy-frontier.csv, each with its source.
+    // The frontier: the report's own controller first (here not the final one), every shipped controller
+    // and the scripted gait measured with the report's episodes, then the points of
+    // docs/energy-frontier.csv, each with its source.
     let frontier = results.frontier.expect("frontier.csv reads back");
     let measured: Vec<&str> =
         frontier.iter().filter(|r| r.longitudinal_episodes == Some(1)).map(|r| r.label.as_str()).collect();
-    let mut expected = vec!["final".to_owned()];
+    let mut expected = vec![settings.policy.display().to_string(), "final".to_owned()];
     let mut experiments: Vec<String> = std::fs::read_dir(root.join("policies/experiments"))
         .unwrap()
         .map(|e| e.unwrap())
