@@ -144,8 +144,8 @@ pub struct RewardConfig {
     /// stroke and quick corrections, is not asked for a steady one; 0 weighs every speed 1.
     pub smoothness_min_speed_mps: f64,
     /// Weighs the smoothness term more where the reference path sinks at a slope the robot can glide
-    /// (horizontal over sink speed at least [`SMOOTHNESS_GLIDE_MIN_RATIO`]): times 1 + this gain from a
-    /// sink rate of [`SMOOTHNESS_GLIDE_SINK_MPS`] on, rising linearly from 1 on a level path, so that a
+    /// (horizontal over sink speed at least [`GLIDE_MIN_RATIO`]): times 1 + this gain from a
+    /// sink rate of [`GLIDE_SINK_MPS`] on, rising linearly from 1 on a level path, so that a
     /// glide slope, which the robot can fly with its wings held, asks for a held stroke; level flight,
     /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
     pub smoothness_glide_gain: f64,
@@ -155,6 +155,12 @@ pub struct RewardConfig {
     /// its cruise speed), and a price on it teaches the policy to fly faster than asked; 0 prices the
     /// energy at every speed.
     pub energy_min_speed_mps: f64,
+    /// Prices the energy more where the reference path sinks at a slope the robot can glide (the
+    /// slopes of `smoothness_glide_gain`): the price times 1 + this gain from a sink rate of
+    /// [`GLIDE_SINK_MPS`] on, so r_energy reads 1 - (1 + gain)(1 - e^(-P / scale)) there and falls
+    /// below 0 for a flapping stroke: the paper's "gliding instead of flapping when possible", priced
+    /// where it is possible. 0 prices every slope alike.
+    pub energy_glide_gain: f64,
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
@@ -168,14 +174,15 @@ pub fn speed_ramp(min_speed: f64, speed: f64) -> f64 {
     if min_speed > 0.0 { (1.0 - (min_speed - speed) / SPEED_RAMP_MPS).clamp(0.0, 1.0) } else { 1.0 }
 }
 
-/// The sink rate from which `reward.smoothness_glide_gain` weighs in full (m/s): the gentlest glide
+/// The sink rate from which `reward.smoothness_glide_gain` and `reward.energy_glide_gain` weigh in full
+/// (m/s): the gentlest glide
 /// commands sink 3.5 / 4.6 = 0.76 m/s (`reference.glide_speed_mps`, `reference.glide_ratio`).
-pub const SMOOTHNESS_GLIDE_SINK_MPS: f64 = 0.5;
+pub const GLIDE_SINK_MPS: f64 = 0.5;
 
-/// The steepest slope `reward.smoothness_glide_gain` counts as a glide: horizontal over sink speed at
+/// The steepest slope the glide gains count as a glide: horizontal over sink speed at
 /// least this. The shipped model glides 4.6 : 1 (`flapper fly --controller glide`); longitudinal's dive
 /// (3.8 m/s forward, 1.5 m/s down) is 2.5 : 1.
-pub const SMOOTHNESS_GLIDE_MIN_RATIO: f64 = 3.5;
+pub const GLIDE_MIN_RATIO: f64 = 3.5;
 
 /// Paper III-F: 30 s episodes, 3 m error termination, attitude termination in stages 1-2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -334,6 +341,7 @@ impl Default for RewardConfig {
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
             energy_min_speed_mps: 0.0,
+            energy_glide_gain: 0.0,
         }
     }
 }
@@ -530,6 +538,7 @@ impl TaskConfig {
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
+            ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -699,6 +708,8 @@ mod tests {
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
         let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
+        let err = refused("[reward]\nenergy_glide_gain = -2\n");
+        assert!(err.contains("reward.energy_glide_gain") && err.contains("-2"), "{err}");
         let err = refused("[reward]\nsmoothness_turn_scale_degps = -30\n");
         assert!(err.contains("reward.smoothness_turn_scale_degps") && err.contains("-30"), "{err}");
         let err = refused("[reward]\nsmoothness_min_speed_mps = -3\n");

@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
-use crate::config::{SMOOTHNESS_GLIDE_MIN_RATIO, SMOOTHNESS_GLIDE_SINK_MPS, TaskConfig, speed_ramp};
+use crate::config::{GLIDE_MIN_RATIO, GLIDE_SINK_MPS, TaskConfig, speed_ramp};
 use crate::control_loop::{ControlLoop, ControlLoopState};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
@@ -315,19 +315,24 @@ impl FlightEnv {
     }
 
     /// The share of the energy's price paid at the current step: the speed ramp of
-    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0).
+    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times 1 +
+    /// `reward.energy_glide_gain` x [`Self::glide_share`].
     pub fn energy_price_share(&self) -> f64 {
-        let min_speed = self.config.reward.energy_min_speed_mps;
-        if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 }
+        let reward = &self.config.reward;
+        let min_speed = reward.energy_min_speed_mps;
+        let speed = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
+        if reward.energy_glide_gain > 0.0 {
+            speed * (1.0 + reward.energy_glide_gain * self.glide_share())
+        } else {
+            speed
+        }
     }
 
     /// The weight of the learner's smoothness term for the action chosen at the current observation:
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
     /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
     /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0), times
-    /// 1 + `reward.smoothness_glide_gain` x the reference's sink rate over [`SMOOTHNESS_GLIDE_SINK_MPS`]
-    /// (at most 1) where it sinks at a glide slope (no steeper than [`SMOOTHNESS_GLIDE_MIN_RATIO`]; 1
-    /// on level paths, climbs and dives).
+    /// 1 + `reward.smoothness_glide_gain` x [`Self::glide_share`].
     pub fn smoothness_weight(&self) -> f32 {
         let reward = &self.config.reward;
         let mut weight = 1.0;
@@ -337,13 +342,18 @@ impl FlightEnv {
         }
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         if reward.smoothness_glide_gain > 0.0 {
-            let velocity = self.reference.velocity(self.step);
-            let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
-            if sink > 0.0 && horizontal >= SMOOTHNESS_GLIDE_MIN_RATIO * sink {
-                weight *= 1.0 + reward.smoothness_glide_gain * (sink / SMOOTHNESS_GLIDE_SINK_MPS).min(1.0);
-            }
+            weight *= 1.0 + reward.smoothness_glide_gain * self.glide_share();
         }
         weight as f32
+    }
+
+    /// How much of a glide the reference asks at the current step: its sink rate over
+    /// [`GLIDE_SINK_MPS`] (at most 1) where it sinks at a slope the robot can glide (no steeper than
+    /// [`GLIDE_MIN_RATIO`]), 0 on level paths, climbs and steeper dives.
+    fn glide_share(&self) -> f64 {
+        let velocity = self.reference.velocity(self.step);
+        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        if sink > 0.0 && horizontal >= GLIDE_MIN_RATIO * sink { (sink / GLIDE_SINK_MPS).min(1.0) } else { 0.0 }
     }
 
     /// The finished episode's summary (call when `step` reported an end, before `reset`).

@@ -53,12 +53,13 @@ impl RewardTerms {
         }
     }
 
-    /// The energy priced in part: r_energy moved from its kernel value towards its top (1) by the
-    /// share of the price waived, `share` 1 leaving it as it is and 0 reading 1 whatever the power
-    /// (`reward.energy_min_speed_mps`).
+    /// The energy priced by `share`: r_energy = 1 - share (1 - e), e the kernel's value. `share` 1 leaves
+    /// it as it is, below 1 moves it towards its top (1; 0 reads 1 whatever the power,
+    /// `reward.energy_min_speed_mps`), above 1 prices the power more (`reward.energy_glide_gain`), down
+    /// to 1 - share where the kernel reads 0.
     pub fn with_energy_priced(self, share: f64) -> Self {
         // In full: the kernel's own value, bit for bit (1 - (1 - e) need not be e).
-        if share >= 1.0 { self } else { Self { energy: 1.0 - share.max(0.0) * (1.0 - self.energy), ..self } }
+        if share == 1.0 { self } else { Self { energy: 1.0 - share.max(0.0) * (1.0 - self.energy), ..self } }
     }
 
     /// The weighted sum.

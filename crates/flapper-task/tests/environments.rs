@@ -527,3 +527,38 @@ fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climb
     // It multiplies the other weights: below the speed ramp a descent weighs nothing either.
     assert_eq!(first_weight(sloped(-0.83), 4.0, 4.5), 0.0);
 }
+
+#[test]
+fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
+    // Straight paths at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
+    let sloped = |vertical: f64| {
+        let points =
+            (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
+        Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
+    };
+    let flown = |reference: Arc<Reference>, gain: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.energy_glide_gain = gain;
+        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let share = env.energy_price_share();
+        // A full stroke: the joints work, so the kernel is well below its top.
+        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
+        (share, step)
+    };
+    let (share, plain) = flown(sloped(-0.83), 0.0);
+    assert_eq!(share, 1.0, "off: priced alike on every slope");
+    let (share, glide) = flown(sloped(-0.83), 9.0);
+    assert!((share - 10.0).abs() < 1e-9, "a glide slope: 1 + the gain, got {share}");
+    // The same flight, the energy priced ten times: 1 - 10 (1 - e).
+    assert_eq!(glide.position_error_m, plain.position_error_m);
+    assert!(plain.terms.energy < 0.99, "the stroke costs: {:?}", plain.terms);
+    assert!((glide.terms.energy - (1.0 - 10.0 * (1.0 - plain.terms.energy))).abs() < 1e-12);
+    let weight = TaskConfig::default().reward.energy_weight;
+    assert!((plain.reward - glide.reward - weight * 9.0 * (1.0 - plain.terms.energy)).abs() < 1e-9);
+    assert!((flown(sloped(-0.25), 9.0).0 - 5.5).abs() < 1e-9, "half the full sink: half the gain");
+    for (vertical, what) in [(-1.5, "longitudinal's dive, 2.5 : 1"), (0.0, "level"), (0.8, "a climb")] {
+        let (share, step) = flown(sloped(vertical), 9.0);
+        assert_eq!(share, 1.0, "{what}: no glide, priced as everywhere");
+        assert_eq!(step.terms, flown(sloped(vertical), 0.0).1.terms, "{what}: the kernel itself, bit for bit");
+    }
+}
