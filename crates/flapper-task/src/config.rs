@@ -161,6 +161,10 @@ pub struct RewardConfig {
     /// below 0 for a flapping stroke: the paper's "gliding instead of flapping when possible", priced
     /// where it is possible. 0 prices every slope alike.
     pub energy_glide_gain: f64,
+    /// The share of the energy's price paid where the reference dives steeper than a glide slope
+    /// (sinking faster than horizontal speed / [`GLIDE_MIN_RATIO`]), where the robot must flap to brake
+    /// and hold the path: 1 prices it as everywhere, 0 not at all (r_energy reads 1 there).
+    pub energy_dive_share: f64,
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
@@ -342,6 +346,7 @@ impl Default for RewardConfig {
             smoothness_glide_gain: 0.0,
             energy_min_speed_mps: 0.0,
             energy_glide_gain: 0.0,
+            energy_dive_share: 1.0,
         }
     }
 }
@@ -539,6 +544,7 @@ impl TaskConfig {
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
             ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
+            ("reward.energy_dive_share", r.energy_dive_share, 0.0, 1.0),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -708,6 +714,8 @@ mod tests {
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
         let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
+        let err = refused("[reward]\nenergy_dive_share = 1.5\n");
+        assert!(err.contains("reward.energy_dive_share") && err.contains("1.5"), "{err}");
         let err = refused("[reward]\nenergy_glide_gain = -2\n");
         assert!(err.contains("reward.energy_glide_gain") && err.contains("-2"), "{err}");
         let err = refused("[reward]\nsmoothness_turn_scale_degps = -30\n");

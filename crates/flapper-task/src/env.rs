@@ -316,16 +316,19 @@ impl FlightEnv {
 
     /// The share of the energy's price paid at the current step: the speed ramp of
     /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times 1 +
-    /// `reward.energy_glide_gain` x [`Self::glide_share`].
+    /// `reward.energy_glide_gain` x [`Self::glide_share`] on glide slopes, or times
+    /// `reward.energy_dive_share` on steeper descents.
     pub fn energy_price_share(&self) -> f64 {
         let reward = &self.config.reward;
         let min_speed = reward.energy_min_speed_mps;
-        let speed = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
+        let mut share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
         if reward.energy_glide_gain > 0.0 {
-            speed * (1.0 + reward.energy_glide_gain * self.glide_share())
-        } else {
-            speed
+            share *= 1.0 + reward.energy_glide_gain * self.glide_share();
         }
+        if reward.energy_dive_share < 1.0 && self.dives() {
+            share *= reward.energy_dive_share;
+        }
+        share
     }
 
     /// The weight of the learner's smoothness term for the action chosen at the current observation:
@@ -345,6 +348,14 @@ impl FlightEnv {
             weight *= 1.0 + reward.smoothness_glide_gain * self.glide_share();
         }
         weight as f32
+    }
+
+    /// Whether the reference descends steeper than a glide slope at the current step (sinking faster
+    /// than its horizontal speed over [`GLIDE_MIN_RATIO`]).
+    fn dives(&self) -> bool {
+        let velocity = self.reference.velocity(self.step);
+        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        sink > 0.0 && horizontal < GLIDE_MIN_RATIO * sink
     }
 
     /// How much of a glide the reference asks at the current step: its sink rate over

@@ -562,3 +562,31 @@ fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
         assert_eq!(step.terms, flown(sloped(vertical), 0.0).1.terms, "{what}: the kernel itself, bit for bit");
     }
 }
+
+#[test]
+fn the_energy_in_steep_dives_is_priced_by_its_share_and_glide_slopes_are_not_dives() {
+    let sloped = |vertical: f64| {
+        let points =
+            (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
+        Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
+    };
+    let flown = |reference: Arc<Reference>, dive_share: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.energy_dive_share = dive_share;
+        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let share = env.energy_price_share();
+        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
+        (share, step)
+    };
+    let (share, free) = flown(sloped(-1.5), 0.0);
+    assert_eq!(share, 0.0, "longitudinal's dive, 2.5 : 1: not priced");
+    assert_eq!(free.terms.energy, 1.0, "the kernel's top whatever the power");
+    let (share, priced) = flown(sloped(-1.5), 0.25);
+    assert_eq!(share, 0.25);
+    assert!(priced.terms.energy < 1.0 && priced.terms.energy > flown(sloped(-1.5), 1.0).1.terms.energy);
+    for (vertical, what) in [(-0.83, "a glide slope"), (0.0, "level"), (0.8, "a climb")] {
+        let (share, step) = flown(sloped(vertical), 0.0);
+        assert_eq!(share, 1.0, "{what}: no dive, priced in full");
+        assert_eq!(step.terms, flown(sloped(vertical), 1.0).1.terms, "{what}: the kernel itself, bit for bit");
+    }
+}
