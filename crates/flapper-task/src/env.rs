@@ -353,8 +353,7 @@ impl FlightEnv {
     /// Whether the reference descends steeper than a glide slope at the current step (sinking faster
     /// than its horizontal speed over [`GLIDE_MIN_RATIO`]).
     fn dives(&self) -> bool {
-        let velocity = self.reference.velocity(self.step);
-        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        let (sink, horizontal) = self.sink_and_horizontal_mps();
         sink > 0.0 && horizontal < GLIDE_MIN_RATIO * sink
     }
 
@@ -362,9 +361,14 @@ impl FlightEnv {
     /// [`GLIDE_SINK_MPS`] (at most 1) where it sinks at a slope the robot can glide (no steeper than
     /// [`GLIDE_MIN_RATIO`]), 0 on level paths, climbs and steeper dives.
     fn glide_share(&self) -> f64 {
-        let velocity = self.reference.velocity(self.step);
-        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        let (sink, horizontal) = self.sink_and_horizontal_mps();
         if sink > 0.0 && horizontal >= GLIDE_MIN_RATIO * sink { (sink / GLIDE_SINK_MPS).min(1.0) } else { 0.0 }
+    }
+
+    /// The reference's sink rate (positive downwards) and horizontal speed at the current step.
+    fn sink_and_horizontal_mps(&self) -> (f64, f64) {
+        let velocity = self.reference.velocity(self.step);
+        (-velocity.z, velocity.x.hypot(velocity.y))
     }
 
     /// The finished episode's summary (call when `step` reported an end, before `reset`).
