@@ -159,22 +159,13 @@ pub fn robustness(
     Ok(())
 }
 
-/// The controllers the energy frontier measures, with their names: the report's own policy (`policy`,
-/// named "final" where it is the shipped final controller, else by its file, with the shipped final beside
-/// it), every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the previous
-/// final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic) and the
-/// previous stage-4 lineage (`policies/history/stage4`) where they are there.
+/// The controllers the energy frontier measures, with their names: the report's own policy (`policy`)
+/// by its file where it is not one of the shipped ones below (which it is measured as otherwise), the final
+/// controller, every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the
+/// previous final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic)
+/// and the previous stage-4 lineage (`policies/history/stage4`) where they are there.
 pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
-    let final_policy = shipped_file(FINAL_POLICY);
-    let same_file = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    };
-    let mut policies = if same_file(policy, &final_policy) {
-        vec![("final".to_owned(), final_policy)]
-    } else {
-        vec![(policy.display().to_string(), policy.to_owned()), ("final".to_owned(), final_policy)]
-    };
+    let mut shipped = vec![("final".to_owned(), shipped_file(FINAL_POLICY))];
     let mut experiments: Vec<(String, PathBuf)> = std::fs::read_dir(shipped_file(FRONTIER_EXPERIMENTS))
         .into_iter()
         .flatten()
@@ -183,15 +174,22 @@ pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
         .filter(|(_, path)| path.is_file())
         .collect();
     experiments.sort();
-    policies.extend(experiments);
+    shipped.extend(experiments);
     for (label, file) in
         [("previous final", FRONTIER_PREVIOUS_FINAL), ("previous stage-4 lineage", FRONTIER_PREVIOUS_STAGE4)]
     {
         let path = shipped_file(file);
         if path.is_file() {
-            policies.push((label.to_owned(), path));
+            shipped.push((label.to_owned(), path));
         }
     }
+    let identity = |path: &Path| path.canonicalize().unwrap_or_else(|_| path.to_owned());
+    let own = identity(policy);
+    if shipped.iter().any(|(_, path)| identity(path) == own) {
+        return shipped;
+    }
+    let mut policies = vec![(policy.display().to_string(), policy.to_owned())];
+    policies.extend(shipped);
     policies
 }
 

@@ -30,6 +30,22 @@ fn exact_start(mut config: TaskConfig) -> TaskConfig {
     config
 }
 
+/// A straight path at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
+fn sloped(vertical: f64) -> Arc<Reference> {
+    let points = (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
+    Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
+}
+
+/// The energy's price share at the start of `reference` under `config` (from the exact start), and the
+/// fifth step of a full stroke, when the joints work and the energy kernel is well below its top.
+fn stroke_priced(config: TaskConfig, reference: Arc<Reference>) -> (f64, flapper_task::env::StepResult) {
+    let mut env =
+        FlightEnv::new(&robot(), Arc::new(exact_start(config)), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+    let share = env.energy_price_share();
+    let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
+    (share, step)
+}
+
 #[test]
 fn observation_has_540_named_numbers() {
     let layout = ObservationLayout { history_frames: 25, lookahead_steps: 30 };
@@ -477,13 +493,9 @@ fn the_energy_is_priced_in_full_above_its_speed_and_not_at_all_below_its_ramp() 
         Arc::new(Reference::new(format!("level {speed}"), 0.02, points))
     };
     let flown = |reference: Arc<Reference>, min_speed: f64| {
-        let mut config = exact_start(TaskConfig::default());
+        let mut config = TaskConfig::default();
         config.reward.energy_min_speed_mps = min_speed;
-        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
-        let share = env.energy_price_share();
-        // A full stroke: the joints work, so the kernel is well below its top when priced.
-        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
-        (share, step)
+        stroke_priced(config, reference)
     };
     let (share, priced) = flown(level(2.9), 0.0);
     assert_eq!(share, 1.0, "off: priced at every speed");
@@ -503,12 +515,6 @@ fn the_energy_is_priced_in_full_above_its_speed_and_not_at_all_below_its_ramp() 
 
 #[test]
 fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climbs_or_dives() {
-    // Straight paths at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
-    let sloped = |vertical: f64| {
-        let points =
-            (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
-        Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
-    };
     let first_weight = |reference: Arc<Reference>, gain: f64, min_speed: f64| {
         let mut config = exact_start(TaskConfig::default());
         config.reward.smoothness_glide_gain = gain;
@@ -530,20 +536,10 @@ fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climb
 
 #[test]
 fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
-    // Straight paths at 3.8 m/s forward sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
-    let sloped = |vertical: f64| {
-        let points =
-            (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
-        Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
-    };
     let flown = |reference: Arc<Reference>, gain: f64| {
-        let mut config = exact_start(TaskConfig::default());
+        let mut config = TaskConfig::default();
         config.reward.energy_glide_gain = gain;
-        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
-        let share = env.energy_price_share();
-        // A full stroke: the joints work, so the kernel is well below its top.
-        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
-        (share, step)
+        stroke_priced(config, reference)
     };
     let (share, plain) = flown(sloped(-0.83), 0.0);
     assert_eq!(share, 1.0, "off: priced alike on every slope");
@@ -565,18 +561,10 @@ fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
 
 #[test]
 fn the_energy_in_steep_dives_is_priced_by_its_share_and_glide_slopes_are_not_dives() {
-    let sloped = |vertical: f64| {
-        let points =
-            (0..=100).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + vertical * 0.02 * k as f64)).collect();
-        Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
-    };
     let flown = |reference: Arc<Reference>, dive_share: f64| {
-        let mut config = exact_start(TaskConfig::default());
+        let mut config = TaskConfig::default();
         config.reward.energy_dive_share = dive_share;
-        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
-        let share = env.energy_price_share();
-        let step = (0..5).map(|_| env.step(&[1.0, 0.0, 1.0, 0.0, 0.0])).last().unwrap();
-        (share, step)
+        stroke_priced(config, reference)
     };
     let (share, free) = flown(sloped(-1.5), 0.0);
     assert_eq!(share, 0.0, "longitudinal's dive, 2.5 : 1: not priced");
