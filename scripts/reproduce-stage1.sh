@@ -4,6 +4,7 @@
 # AVX2 and FMA and on any thread count (docs/training.md, "Training that reproduces on any CPU and thread
 # count"); about 2-3 minutes on 2 cores.
 #   scripts/reproduce-stage1.sh [RECORDED_DIR]
+# FLAPPER_BIN=PATH uses a binary built elsewhere instead of building one (a machine without a Rust toolchain).
 # RECORDED_DIR holds summary.json and stage1/training.csv; the default is the shipped final controller's run
 # (policies/final, seed 1, the fixed arithmetic). docs/runs/seed3/ is another such record; the previous final
 # controller (policies/history/previous-final) was trained with the arithmetic before it (gemm) and reproduces
@@ -21,7 +22,11 @@ seed=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['seed'])"
 out=$(mktemp -d)/curriculum
 trap 'rm -rf "$(dirname "$out")"' EXIT
 cd "$root"
-cargo run --release --quiet -p flapper-cli -- curriculum --out "$out" --seed "$seed" --until-stage 1
+if [[ -n "${FLAPPER_BIN:-}" ]]; then
+    "$FLAPPER_BIN" curriculum --out "$out" --seed "$seed" --until-stage 1
+else
+    cargo run --release --quiet -p flapper-cli -- curriculum --out "$out" --seed "$seed" --until-stage 1
+fi
 python3 - "$recorded/stage1/training.csv" "$out/stage1/training.csv" <<'PY'
 import csv, json, os, sys
 timing = {"wall_time_s", "steps_per_s", "env_time_s", "inference_time_s", "update_time_s"}

@@ -1,5 +1,5 @@
 //! Training reproduces bit for bit whatever the thread count and whatever the CPU's vector width:
-//! `flapper train` runs in child processes with 1, 2 and 3 threads, and with the matrix products
+//! `flapper train` runs in child processes with 1, 2, 3 and 17 threads, and with the matrix products
 //! forced onto the 8-lane (AVX2) and the one-lane (portable) paths, must write the same training.csv
 //! (timing columns apart) and byte-identical checkpoints; and a golden hash pins the result, so that
 //! CI on another CPU model checks that it computes what this repository's CPUs computed.
@@ -94,9 +94,16 @@ fn training_is_the_same_on_any_thread_count_and_any_vector_width() {
     let reference = train(&dir, "threads1", 1, None);
     let (csv, (tensors, description)) = (learning_columns(&reference), checkpoint(&reference));
     assert_eq!(csv.len(), 2, "two iterations logged");
-    for (name, threads, simd) in
-        [("threads2", 2, None), ("threads3", 3, None), ("avx2", 2, Some("avx2")), ("portable", 1, Some("portable"))]
-    {
+    // 17 threads: more than twice CHUNKS, so each chunk's actor and critic run side by side and share
+    // their products by rows, as do the rollout's forward passes (slow on 2 cores, but a short run).
+    let runs = [
+        ("threads2", 2, None),
+        ("threads3", 3, None),
+        ("threads17", 17, None),
+        ("avx2", 2, Some("avx2")),
+        ("portable", 1, Some("portable")),
+    ];
+    for (name, threads, simd) in runs {
         let run = train(&dir, name, threads, simd);
         assert_eq!(learning_columns(&run), csv, "{name}: training.csv differs from one thread's");
         let (run_tensors, run_description) = checkpoint(&run);

@@ -167,13 +167,21 @@ pub fn loss_and_gradients(
         grads: Gradients::zeros(policy),
         sums: LossTerms::default(),
     });
-    let inner = (threads / CHUNKS).max(1);
+    // Each chunk's actor and critic are independent: with threads to spare they run side by side too,
+    // 2 x CHUNKS tasks, and what threads remain share each task's products by rows.
+    let side_by_side = threads >= 2;
+    let inner = (threads / if side_by_side { 2 * CHUNKS } else { CHUNKS }).max(1);
     let one_chunk = |(index, chunk): (usize, &mut ChunkScratch)| {
         let rows = chunk_rows(index, batch.size);
         let ChunkScratch { actor, critic, d_mean, d_value, grads, sums } = chunk;
-        let (actor_grads, log_std_grads) = (&mut grads.actor, &mut grads.log_std);
-        *sums = policy_loss(policy, config, batch, rows.clone(), actor, d_mean, actor_grads, log_std_grads, inner);
-        sums.value = value_loss(policy, config, batch, rows, critic, d_value, &mut grads.critic, inner);
+        let Gradients { actor: actor_grads, critic: critic_grads, log_std: log_std_grads } = grads;
+        let policy_rows = rows.clone();
+        let policy_part =
+            move || policy_loss(policy, config, batch, policy_rows, actor, d_mean, actor_grads, log_std_grads, inner);
+        let value_part = move || value_loss(policy, config, batch, rows, critic, d_value, critic_grads, inner);
+        let (policy_sums, value_sum) =
+            if side_by_side { rayon::join(policy_part, value_part) } else { (policy_part(), value_part()) };
+        *sums = LossTerms { value: value_sum, ..policy_sums };
     };
     if threads >= 2 {
         scratch.chunks.par_iter_mut().enumerate().with_max_len(1).for_each(one_chunk);
