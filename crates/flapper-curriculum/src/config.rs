@@ -69,6 +69,12 @@ pub struct StageConfig {
     /// A sharp policy (small std) pins the adaptive learning rate at its floor: the KL of a Gaussian
     /// grows as (change of mean / std)^2. Ignored for the first stage (`[ppo] init_noise_std`).
     pub start_noise_std: Option<f32>,
+    /// What a stage does when its budget is spent without meeting its gate and its validations have
+    /// stalled (no better than before the last few): absent, it stops the run; set, it restarts its
+    /// exploration once, continuing from its last checkpoint with the action noise reset to this
+    /// standard deviation, for as many iterations as an extension gets (within the run's budget).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restart_noise_std: Option<f32>,
     /// Judge and hand over, at each validation, the mean of the weights of the last this many
     /// checkpoints of the stage (the one just saved and those before it; fewer early in the stage)
     /// instead of the checkpoint alone: stochastic weight averaging, for a fine-tuning stage whose
@@ -358,10 +364,14 @@ impl CurriculumConfig {
                     "average_checkpoints must be in [1, {MAX_AVERAGED_CHECKPOINTS}], got {count}"
                 )));
             }
-            if let Some(std) = stage.start_noise_std
-                && !(std > 0.0 && std <= 10.0)
+            for (key, value) in
+                [("start_noise_std", stage.start_noise_std), ("restart_noise_std", stage.restart_noise_std)]
             {
-                return Err(bad(format!("start_noise_std must be in (0, 10], got {std}")));
+                if let Some(std) = value
+                    && !(std > 0.0 && std <= 10.0)
+                {
+                    return Err(bad(format!("{key} must be in (0, 10], got {std}")));
+                }
             }
             let train = config.stage_train_config(number).map_err(|source| CurriculumConfigError::Stage {
                 origin: origin.to_owned(),
@@ -588,6 +598,17 @@ task = { stage = 2 }
         assert_eq!(slow.stages[4].gate, Gate { min_iterations: 400, ..Gate::completing(50.0) }, "written whole");
         check_budget(&slow, "curriculum-slow-flight.toml");
 
+        // The shipped curriculum with stage 3 restarting when stalled, and the budget a restart needs: after
+        // seed 2's stages 1-2 (227 iterations) and a stalled stage 3 (3200), the shipped 30 M leave no room
+        // once stages 4-5 are reserved; 42 M leave 1200 iterations.
+        let restart = shipped("experiments/curriculum-restart-stalled.toml");
+        assert_eq!(restart.stages[2].restart_noise_std, Some(0.4));
+        let but_restart = |s: &StageConfig| StageConfig { restart_noise_std: None, ..s.clone() };
+        assert!(restart.stages.iter().map(but_restart).eq(five.stages.iter().cloned()), "the shipped stages otherwise");
+        let seed2_before_stage3 = 227 * 6144;
+        assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 0);
+        assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1200);
+
         let oscillator = shipped("experiments/curriculum-oscillator.toml");
         assert_eq!(task_stages(&oscillator), [1, 2, 3, 3, 4]);
         let smoothness: Vec<f32> =
@@ -723,6 +744,10 @@ task = { stage = 3 }
         assert!(e.contains("episodes"), "{e}");
         let e = err("start_noise_std = 0.4", "start_noise_std = -1");
         assert!(e.contains("start_noise_std"), "{e}");
+        for bad in ["0", "-0.4", "11", "nan"] {
+            let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\nrestart_noise_std = {bad}"));
+            assert!(e.contains("restart_noise_std must be in (0, 10]"), "{bad}: {e}");
+        }
         for count in [0, MAX_AVERAGED_CHECKPOINTS + 1] {
             let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\naverage_checkpoints = {count}"));
             assert!(

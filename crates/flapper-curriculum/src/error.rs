@@ -26,8 +26,9 @@ pub enum CurriculumError {
     #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
     Busy(PathBuf),
     #[error(
-        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}. Its runs are in '{dir}'",
-        .stopped.stage, .stopped.name, .stopped.gate, .stopped.iterations
+        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}.{} Its runs are in '{dir}'",
+        .stopped.stage, .stopped.name, .stopped.gate, .stopped.iterations,
+        .stopped.stopped_because.as_ref().map_or(String::new(), |why| format!(" No more iterations: {why}."))
     )]
     GateMissed {
         /// The stage, its gate, what it spent and the best score it reached (also `stopped` in `summary.json`).

@@ -169,10 +169,13 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
 }
 
 /// Whether stage `number` trains and is judged the same under both curricula (its own entry and the
-/// training config the shared tables make of it).
+/// training config the shared tables make of it). `restart_noise_std` may differ: it says only what a
+/// stage does once its budget is spent, so a stage that stopped stalled can be given a restart and
+/// continued in its folder.
 fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool {
     let Some(stage) = b.stages.get(number - 1) else { return false };
-    *stage == a.stages[number - 1]
+    let but_restart = |s: &StageConfig| StageConfig { restart_noise_std: None, ..s.clone() };
+    but_restart(stage) == but_restart(&a.stages[number - 1])
         && match (a.stage_train_config(number), b.stage_train_config(number)) {
             (Ok(x), Ok(y)) => x == y,
             _ => false,
@@ -239,6 +242,7 @@ fn run_stage(
     // Done training: the final policy is written, or the budget is spent, or the gate was met before
     // the last checkpoint (the run stops one iteration after the validation that meets it).
     // (An extended stage wrote its policy when its first budget ran out: only its checkpoints tell.)
+    let mut stopped_because = None;
     let mut finished = (here.join("policy.safetensors").exists() && extensions.is_empty())
         || resumed_at.is_some_and(|at| at >= iterations || selection.gate_met_before(&stage.gate, at));
     let mut resumed_at = resumed_at;
@@ -267,36 +271,87 @@ fn run_stage(
                 resumed_at: resumed_at.unwrap_or(0),
             });
             let start = match (resumed_at, &previous) {
-                (Some(_), _) => Start::Resume,
+                (Some(at), _) => match restart_due(&extensions, at) {
+                    Some(noise_std) => Start::Restart { noise_std },
+                    None => Start::Resume,
+                },
                 (None, Some(path)) => Start::InitFrom(path.clone()),
                 (None, None) => Start::Fresh,
             };
-            let mut run_config =
-                if matches!(start, Start::Resume) { saved_config(&here)? } else { train_config.clone() };
+            let mut run_config = if matches!(start, Start::Resume | Start::Restart { .. }) {
+                saved_config(&here)?
+            } else {
+                train_config.clone()
+            };
             run_config.runner.iterations = iterations;
             let round = Round { robot, stage, number, here: &here, names: &names, set: &set, averaged };
             selection = round.train(&run_config, start, selection, progress)?;
         }
-        if choose(stage, &selection).is_some() || extensions.len() >= MAX_EXTENSIONS {
+        if choose(stage, &selection).is_some() {
             break;
         }
-        let Some(improvement) = selection.still_improving(TREND_WINDOW) else { break };
+        let (reason, restart_noise_std) = match next_round(stage, &selection, &extensions) {
+            Ok(round) => round,
+            Err(why) => {
+                stopped_because = Some(why);
+                break;
+            }
+        };
         let added = config.extension_iterations(number, spent_env_steps, iterations).map_err(RunError::from)?;
         if added == 0 {
+            stopped_because = Some(format!(
+                "{reason}, but the run's max_env_steps leaves no room for another {} iterations after the later stages' budgets",
+                stage.validate_every
+            ));
             break;
         }
-        extensions.push(Extension {
-            at_iteration: iterations,
-            added_iterations: added,
-            reason: improvement.describe(TREND_WINDOW),
-        });
+        let reason = match restart_noise_std {
+            Some(std) => format!(
+                "{reason}; exploration restarted from the checkpoint of iteration {iterations} with action noise {std}"
+            ),
+            None => reason,
+        };
+        extensions.push(Extension { at_iteration: iterations, added_iterations: added, reason, restart_noise_std });
         write_extensions(&here, &extensions)?;
         progress(Progress::StageExtended { stage: number, extension: extensions.last().expect("just pushed") });
         iterations += added;
         resumed_at = saved_checkpoints(&here).last().map(|(iteration, _)| *iteration);
         finished = false;
     }
-    select(stage, number, &here, &selection, averaged, extensions)
+    select(stage, number, &here, &selection, averaged, extensions, stopped_because)
+}
+
+/// What a stage whose budget is spent without meeting its gate does next, from its trend: more iterations
+/// while it still improves; one restart of its exploration once it has stalled, if its config asks for
+/// restarts; else nothing, and why (`Err`).
+fn next_round(
+    stage: &StageConfig,
+    selection: &Selection,
+    extensions: &[Extension],
+) -> Result<(String, Option<f32>), String> {
+    if extensions.len() >= MAX_EXTENSIONS {
+        return Err(format!("it had been given {MAX_EXTENSIONS} extensions or restarts already"));
+    }
+    let Some(trend) = selection.trend(TREND_WINDOW) else {
+        return Err(format!("fewer than {} validations tell no trend", 2 * TREND_WINDOW));
+    };
+    let described = trend.describe(TREND_WINDOW);
+    if trend.improving() {
+        return Ok((described, None));
+    }
+    match stage.restart_noise_std {
+        None => Err(format!("{described}; the stage restarts no exploration (its restart_noise_std is not set)")),
+        Some(_) if extensions.iter().any(|e| e.restart_noise_std.is_some()) => {
+            Err(format!("{described}, after its exploration had been restarted once already"))
+        }
+        Some(std) => Ok((described, Some(std))),
+    }
+}
+
+/// The action noise to restart with when the stage's latest checkpoint (`latest`, an iteration) is the
+/// one a restart began from: a run interrupted before its first checkpoint after a restart restarts again.
+fn restart_due(extensions: &[Extension], latest: usize) -> Option<f32> {
+    extensions.last().filter(|e| e.at_iteration == latest).and_then(|e| e.restart_noise_std)
 }
 
 /// One stage's training from `start` to its config's iterations, each checkpoint judged on the
@@ -444,6 +499,7 @@ fn select(
     selection: &Selection,
     averaged: usize,
     extensions: Vec<Extension>,
+    stopped_because: Option<String>,
 ) -> Result<StageOutcome, CurriculumError> {
     let history = flapper_ppo::training_log::read_history(&here.join("training.csv"))
         .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
@@ -466,6 +522,7 @@ fn select(
             best_validation_rms_m: best.map(|b| b.score.mean_rms_m),
             cpu: crate::machine::cpu_model(),
             extensions: extensions.clone(),
+            stopped_because,
         };
         return Err(CurriculumError::GateMissed {
             best: format!(

@@ -190,6 +190,12 @@ impl Selection {
     /// those before it (more episodes completed, or as many with a mean RMS error at least
     /// [`IMPROVEMENT_RMS`] smaller). `None` with fewer than `2 window` validations or no improvement.
     pub fn still_improving(&self, window: usize) -> Option<Improvement> {
+        self.trend(window).filter(|t| t.improving())
+    }
+
+    /// The best of the last `window` validations against the best of those before it, improving or not;
+    /// `None` with fewer than `2 window` validations.
+    pub fn trend(&self, window: usize) -> Option<Improvement> {
         if window == 0 || self.rows.len() < 2 * window {
             return None;
         }
@@ -197,9 +203,7 @@ impl Selection {
         let earlier = best(self.rows[..split].iter())?;
         let recent = best(self.rows[split..].iter())?;
         let (e, r) = (&earlier.score, &recent.score);
-        let improving = r.completed_percent > e.completed_percent
-            || (r.completed_percent == e.completed_percent && r.mean_rms_m <= (1.0 - IMPROVEMENT_RMS) * e.mean_rms_m);
-        improving.then_some(Improvement {
+        Some(Improvement {
             earlier_iteration: earlier.iteration,
             earlier_completed_percent: e.completed_percent,
             earlier_rms_m: e.mean_rms_m,
@@ -234,10 +238,20 @@ pub struct Improvement {
 }
 
 impl Improvement {
-    /// In words, for the log and `summary.json`.
+    /// More episodes completed recently, or as many with a mean RMS error at least [`IMPROVEMENT_RMS`]
+    /// smaller.
+    pub fn improving(&self) -> bool {
+        self.recent_completed_percent > self.earlier_completed_percent
+            || (self.recent_completed_percent == self.earlier_completed_percent
+                && self.recent_rms_m <= (1.0 - IMPROVEMENT_RMS) * self.earlier_rms_m)
+    }
+
+    /// In words, for the log and `summary.json`: "still improving: ..." or "stalled: ...".
     pub fn describe(&self, window: usize) -> String {
+        let (verdict, verb) =
+            if self.improving() { ("still improving", "beats") } else { ("stalled", "does not beat") };
         format!(
-            "still improving: the best of the last {window} validations (iteration {}: {:.1}% completed, RMS {:.3} m) beats the best before them (iteration {}: {:.1}%, {:.3} m)",
+            "{verdict}: the best of the last {window} validations (iteration {}: {:.1}% completed, RMS {:.3} m) {verb} the best before them (iteration {}: {:.1}%, {:.3} m)",
             self.recent_iteration,
             self.recent_completed_percent,
             self.recent_rms_m,
@@ -256,6 +270,10 @@ pub struct Extension {
     pub at_iteration: usize,
     pub added_iterations: usize,
     pub reason: String,
+    /// Set where the stage had stalled and its exploration was restarted instead: the action noise
+    /// (standard deviation) its last checkpoint continued with (the stage's `restart_noise_std`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restart_noise_std: Option<f32>,
 }
 
 /// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked
@@ -352,9 +370,12 @@ pub struct StoppedStage {
     pub best_validation_score: Option<f64>,
     pub best_validation_rms_m: Option<f64>,
     pub cpu: Option<String>,
-    /// The budget extensions it was given before it stopped (none: absent).
+    /// The budget extensions and restarts it was given before it stopped (none: absent).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub extensions: Vec<Extension>,
+    /// Why it was given no more iterations, in words (absent in runs recorded before it was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_because: Option<String>,
 }
 
 /// A stage's wall time, training and validation: the training log's clock (`trained_wall_time_s`, at the

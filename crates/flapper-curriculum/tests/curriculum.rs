@@ -232,6 +232,88 @@ fn a_stage_still_improving_when_its_budget_runs_out_is_extended_and_the_summary_
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Stage 1 of TINY made to stall: a gate nothing meets, a learning rate too small to move a weight (every
+/// validation flies the same policy, so the trend is flat), a validation every iteration.
+fn stalled_stage(restart: &str) -> String {
+    TINY.replacen(
+        "max_iterations = 4\nvalidate_every = 2",
+        &format!("max_iterations = 8\nvalidate_every = 1{restart}"),
+        1,
+    )
+    .replacen("gate = { completed_percent = 0 }", "gate = { completed_percent = 100 }", 1)
+    .replacen("[ppo]\n", "[ppo]\nschedule = \"fixed\"\nlearning_rate = 1e-30\n", 1)
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn a_stalled_stage_restarts_its_exploration_once_where_asked_and_else_stops_saying_why() {
+    // Without restart_noise_std: the stall stops the run, and the message and the summary say why.
+    let plain = scratch("stalled");
+    let e = run(&plain, &stalled_stage(""), None).unwrap_err();
+    assert!(e.contains("missed its gate") && e.contains("No more iterations: stalled"), "{e}");
+    assert!(e.contains("restart_noise_std is not set"), "{e}");
+    let stopped = &summary(&plain)["stopped"];
+    assert_eq!(stopped["iterations"], 8, "{stopped}");
+    assert!(stopped.get("extensions").is_none(), "{stopped}");
+    assert!(stopped["stopped_because"].as_str().unwrap().starts_with("stalled"), "{stopped}");
+    // The stopped stage given a restart continues in its folder (the key changes nothing it trained).
+    let e = run(&plain, &stalled_stage("\nrestart_noise_std = 3.0"), None).unwrap_err();
+    assert!(e.contains("after its exploration had been restarted once already"), "{e}");
+    assert_eq!(summary(&plain)["stopped"]["iterations"], 12);
+    std::fs::remove_dir_all(plain).unwrap();
+
+    // With it: one restart from the last checkpoint, the noise reset, half the budget more; stalled again,
+    // the run stops, saying that the restart was spent.
+    let dir = scratch("restarted");
+    let text = stalled_stage("\nrestart_noise_std = 3.0");
+    let e = run(&dir, &text, None).unwrap_err();
+    assert!(e.contains("after its exploration had been restarted once already"), "{e}");
+    let stopped = &summary(&dir)["stopped"];
+    let extensions = stopped["extensions"].as_array().expect("the restart is recorded");
+    assert_eq!(extensions.len(), 1, "{stopped}");
+    assert_eq!(
+        (extensions[0]["at_iteration"].as_u64(), extensions[0]["added_iterations"].as_u64()),
+        (Some(8), Some(4))
+    );
+    assert_eq!(extensions[0]["restart_noise_std"], 3.0, "{stopped}");
+    let reason = extensions[0]["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("stalled")
+            && reason.contains("restarted from the checkpoint of iteration 8 with action noise 3"),
+        "{reason}"
+    );
+    assert_eq!(stopped["iterations"], 12, "{stopped}");
+    let log = without_timing(&stage_dir(&dir, 1).join("training.csv"));
+    let std_column = log[0].iter().position(|c| c == "action_std").unwrap();
+    let std_at = |iteration: usize| log[iteration][std_column].parse::<f64>().unwrap();
+    // (TINY's noise starts at 1, and a learning rate of 1e-30 moves no weight.)
+    assert!(
+        (std_at(8) - 1.0).abs() < 1e-3 && (std_at(9) - 3.0).abs() < 1e-3,
+        "noise {} before the restart, {} after",
+        std_at(8),
+        std_at(9)
+    );
+    assert_eq!(run(&dir, &text, None).unwrap_err(), e, "running again reports the same, without training more");
+
+    // Interrupted after the restart was decided and before its first checkpoint: it restarts again.
+    let interrupted = scratch("restart-interrupted");
+    copy_dir(&dir, &interrupted);
+    let stage1 = stage_dir(&interrupted, 1);
+    for iteration in 9..=12 {
+        for suffix in ["", ".json"] {
+            std::fs::remove_file(stage1.join(format!("checkpoints/iter_{iteration:06}.safetensors{suffix}"))).unwrap();
+        }
+    }
+    assert_eq!(run(&interrupted, &text, None).unwrap_err().replace("restart-interrupted", "restarted"), e);
+    assert_eq!(without_timing(&stage1.join("training.csv")), log, "the same iterations after the restart");
+    for dir in [dir, interrupted] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
 #[test]
 fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_sought_not_required() {
     let dir = scratch("identification");

@@ -30,6 +30,9 @@ pub enum Start {
     Resume,
     /// New run whose policy (networks and normalizer) starts as another run's (curriculum stages).
     InitFrom(PathBuf),
+    /// Continue from the latest checkpoint as `Resume` does, with the action noise (standard deviation)
+    /// reset to this value: fresh exploration for a curriculum stage whose learning has stalled.
+    Restart { noise_std: f32 },
 }
 
 pub struct Trainer<E: VecEnv> {
@@ -88,7 +91,7 @@ impl<E: VecEnv> Trainer<E> {
                 let folder = RunFolder::create(dir, &config_toml)?;
                 (folder, learner_from(loaded, ppo_config, &runner))
             }
-            Start::Resume => {
+            Start::Resume | Start::Restart { .. } => {
                 let (folder, newest) = RunFolder::open(dir)?;
                 let loaded = checkpoint::load(&newest)?;
                 loaded.check_layout(&newest, o, a)?;
@@ -103,7 +106,11 @@ impl<E: VecEnv> Trainer<E> {
                     env_steps: loaded.info.env_steps,
                     wall_time_s: loaded.info.wall_time_s,
                 };
-                (folder, resumed_learner(loaded, ppo_config, &runner))
+                let mut ppo = resumed_learner(loaded, ppo_config, &runner);
+                if let Start::Restart { noise_std } = start {
+                    ppo.policy.log_std.iter_mut().for_each(|s| *s = noise_std.ln());
+                }
+                (folder, ppo)
             }
         };
         let end_reasons = E::EndReason::ALL.iter().map(|r| r.name()).collect();
@@ -124,7 +131,12 @@ impl<E: VecEnv> Trainer<E> {
         };
         let smoothness = trainer.ppo.config.smoothness_coef > 0.0;
         let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names, smoothness);
-        training_log::prepare(&trainer.csv_path(), &header, matches!(start, Start::Resume), trainer.iteration)?;
+        training_log::prepare(
+            &trainer.csv_path(),
+            &header,
+            matches!(start, Start::Resume | Start::Restart { .. }),
+            trainer.iteration,
+        )?;
         Ok(trainer)
     }
 
