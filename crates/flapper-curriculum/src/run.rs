@@ -142,10 +142,13 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
         if saved == *config {
             return Ok(saved);
         }
-        if saved.max_env_steps != config.max_env_steps {
-            return Err(CurriculumError::OtherSettings { dir: dir.to_owned(), what: "max_env_steps" });
-        }
         let started = (1..=saved.stages.len()).filter(|&k| stage_dir(dir, k).exists()).max().unwrap_or(0);
+        if saved.max_env_steps != config.max_env_steps && !same_budgets(dir, &saved, config, started) {
+            return Err(CurriculumError::OtherSettings {
+                dir: dir.to_owned(),
+                what: "max_env_steps, which would change the budget of a stage it has started,",
+            });
+        }
         for number in 1..=started {
             if !same_stage(&saved, config, number) {
                 return Err(CurriculumError::StartedStageChanged {
@@ -180,6 +183,26 @@ fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool
             (Ok(x), Ok(y)) => x == y,
             _ => false,
         }
+}
+
+/// Whether every stage started in `dir` (1 to `started`) gets the same budget under both curricula's
+/// `max_env_steps`, given what the stages before it spent (their `selected.json`): then a budget raised (or
+/// lowered) changes nothing they trained, only what comes after (an extension or restart, later stages).
+fn same_budgets(dir: &Path, a: &CurriculumConfig, b: &CurriculumConfig, started: usize) -> bool {
+    let mut spent = 0;
+    for number in 1..=started {
+        match (a.stage_iterations(number, spent), b.stage_iterations(number, spent)) {
+            (Ok(x), Ok(y)) if x == y => {}
+            _ => return false,
+        }
+        if number < started {
+            let outcome: Result<StageOutcome, _> =
+                flapper_files::read_json(&stage_dir(dir, number).join("selected.json"));
+            let Ok(outcome) = outcome else { return false };
+            spent += outcome.env_steps;
+        }
+    }
+    true
 }
 
 /// The folder's lock (`.lock`, released by the OS when the process ends).

@@ -298,6 +298,20 @@ fn a_stalled_stage_restarts_its_exploration_once_where_asked_and_else_stops_sayi
     );
     assert_eq!(run(&dir, &text, None).unwrap_err(), e, "running again reports the same, without training more");
 
+    // A budget with no room for the restart after the later stage's (4 iterations of 32 steps): the stall
+    // stops the run, saying so; raised, the same folder restarts (stage 1's own budget is 8 either way); a
+    // budget that would have cut stage 1 is refused.
+    let tight = scratch("restart-budget");
+    let budgeted = |steps: u64| text.replacen("seed = 5\n", &format!("seed = 5\nmax_env_steps = {steps}\n"), 1);
+    let no_room = run(&tight, &budgeted(384), None).unwrap_err();
+    assert!(no_room.contains("leaves no room for another 1 iterations after the later stages' budgets"), "{no_room}");
+    let refused = run(&tight, &budgeted(200), None).unwrap_err();
+    assert!(refused.contains("max_env_steps, which would change the budget of a stage it has started"), "{refused}");
+    let raised = run(&tight, &budgeted(512), None).unwrap_err();
+    assert!(raised.contains("after its exploration had been restarted once already"), "{raised}");
+    assert_eq!(summary(&tight)["stopped"]["extensions"][0]["added_iterations"], 4);
+    std::fs::remove_dir_all(tight).unwrap();
+
     // Interrupted after the restart was decided and before its first checkpoint: it restarts again.
     let interrupted = scratch("restart-interrupted");
     copy_dir(&dir, &interrupted);
