@@ -9,11 +9,11 @@ use std::process::Command;
 
 use flapper_ppo::fixed_matmul::SIMD_VARIABLE;
 
-/// The paper's networks (540-256-128-64) on a run of seconds: 12 environments x 16 steps, 2 iterations,
-/// minibatches of 48 samples (3 per chunk), so every product's ragged edges are exercised.
-fn config(threads: usize) -> String {
+/// The paper's networks (540-256-128-64) on a run of seconds: `envs` environments x 16 steps, 2 iterations,
+/// 4 minibatches (12 environments: 48 samples, 12 per chunk, so every product's ragged edges are exercised).
+fn config(threads: usize, envs: usize) -> String {
     format!(
-        "[runner]\nenvs = 12\niterations = 2\ncheckpoint_every = 1\nseed = 5\nthreads = {threads}\n\
+        "[runner]\nenvs = {envs}\niterations = 2\ncheckpoint_every = 1\nseed = 5\nthreads = {threads}\n\
          [ppo]\nsteps_per_env = 16\n[task.episode]\nmax_steps = 40\n"
     )
 }
@@ -24,8 +24,12 @@ fn config(threads: usize) -> String {
 const GOLDEN_CHECKPOINT_HASH: u64 = 0xea0c_f503_4c91_0474;
 
 fn train(dir: &Path, name: &str, threads: usize, simd: Option<&str>) -> PathBuf {
+    train_envs(dir, name, threads, 12, simd)
+}
+
+fn train_envs(dir: &Path, name: &str, threads: usize, envs: usize, simd: Option<&str>) -> PathBuf {
     let file = dir.join(format!("{name}.toml"));
-    std::fs::write(&file, config(threads)).unwrap();
+    std::fs::write(&file, config(threads, envs)).unwrap();
     let run = dir.join(name);
     let mut command = Command::new(env!("CARGO_BIN_EXE_flapper"));
     command.args(["train", "--config", file.to_str().unwrap(), "--out", run.to_str().unwrap()]);
@@ -94,15 +98,8 @@ fn training_is_the_same_on_any_thread_count_and_any_vector_width() {
     let reference = train(&dir, "threads1", 1, None);
     let (csv, (tensors, description)) = (learning_columns(&reference), checkpoint(&reference));
     assert_eq!(csv.len(), 2, "two iterations logged");
-    // 17 threads: more than twice CHUNKS, so each chunk's actor and critic run side by side and share
-    // their products by rows, as do the rollout's forward passes (slow on 2 cores, but a short run).
-    let runs = [
-        ("threads2", 2, None),
-        ("threads3", 3, None),
-        ("threads17", 17, None),
-        ("avx2", 2, Some("avx2")),
-        ("portable", 1, Some("portable")),
-    ];
+    let runs =
+        [("threads2", 2, None), ("threads3", 3, None), ("avx2", 2, Some("avx2")), ("portable", 1, Some("portable"))];
     for (name, threads, simd) in runs {
         let run = train(&dir, name, threads, simd);
         assert_eq!(learning_columns(&run), csv, "{name}: training.csv differs from one thread's");
@@ -110,6 +107,12 @@ fn training_is_the_same_on_any_thread_count_and_any_vector_width() {
         assert!(run_tensors == tensors, "{name}: the checkpoint's tensors differ from one thread's");
         assert_eq!(run_description, description, "{name}: the checkpoint's description differs");
     }
+    // 17 threads, more than twice CHUNKS, on 72 environments: the rollout's actor and critic forward passes
+    // on 8 threads each share 72 rows, each chunk's actor and critic run side by side on 2 threads each and
+    // share its 72 rows, and the minibatch of 288 samples is gathered in 5 pieces side by side.
+    let (wide_one, wide_many) = (train_envs(&dir, "wide1", 1, 72, None), train_envs(&dir, "wide17", 17, 72, None));
+    assert_eq!(learning_columns(&wide_many), learning_columns(&wide_one), "72 environments: 17 threads' training.csv");
+    assert!(checkpoint(&wide_many) == checkpoint(&wide_one), "72 environments: 17 threads' checkpoint differs");
     let hash = fnv1a(&tensors);
     assert_eq!(
         hash, GOLDEN_CHECKPOINT_HASH,

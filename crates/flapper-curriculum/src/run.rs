@@ -143,12 +143,6 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
             return Ok(saved);
         }
         let started = (1..=saved.stages.len()).filter(|&k| stage_dir(dir, k).exists()).max().unwrap_or(0);
-        if saved.max_env_steps != config.max_env_steps && !same_budgets(dir, &saved, config, started) {
-            return Err(CurriculumError::OtherSettings {
-                dir: dir.to_owned(),
-                what: "max_env_steps, which would change the budget of a stage it has started,",
-            });
-        }
         for number in 1..=started {
             if !same_stage(&saved, config, number) {
                 return Err(CurriculumError::StartedStageChanged {
@@ -157,6 +151,12 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
                     name: saved.stages[number - 1].name.clone(),
                 });
             }
+        }
+        if saved.max_env_steps != config.max_env_steps && !same_budgets(dir, &saved, config, started) {
+            return Err(CurriculumError::OtherSettings {
+                dir: dir.to_owned(),
+                what: "max_env_steps, which would change the budget of a stage it has started,",
+            });
         }
         let replaced = (1..).map(|n| dir.join(format!("curriculum.replaced-{n}.toml"))).find(|p| !p.exists());
         let replaced = replaced.expect("some number is free");
@@ -185,21 +185,39 @@ fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool
         }
 }
 
-/// Whether every stage started in `dir` (1 to `started`) gets the same budget under both curricula's
-/// `max_env_steps`, given what the stages before it spent (their `selected.json`): then a budget raised (or
-/// lowered) changes nothing they trained, only what comes after (an extension or restart, later stages).
-fn same_budgets(dir: &Path, a: &CurriculumConfig, b: &CurriculumConfig, started: usize) -> bool {
+/// Whether the stages started in `dir` (1 to `started`, each the same stage under both curricula) trained
+/// as they would have under `config`'s `max_env_steps`, given what the stages before each spent (their
+/// `selected.json`): each finished stage had the same budget under both, and each extension or restart a
+/// stage was given (`extensions.json`) is the one `config` gives; the last started stage may have more budget
+/// under `config`, not less than it has trained. Then a budget raised (or lowered) changes nothing they
+/// trained, only what is decided after (an extension or restart not yet given, later stages).
+fn same_budgets(dir: &Path, saved: &CurriculumConfig, config: &CurriculumConfig, started: usize) -> bool {
     let mut spent = 0;
     for number in 1..=started {
-        match (a.stage_iterations(number, spent), b.stage_iterations(number, spent)) {
-            (Ok(x), Ok(y)) if x == y => {}
-            _ => return false,
+        let here = stage_dir(dir, number);
+        let (Ok(before), Ok(budget)) = (saved.stage_iterations(number, spent), config.stage_iterations(number, spent))
+        else {
+            return false;
+        };
+        let Ok(extensions) = read_extensions(&here) else { return false };
+        let mut trained = budget;
+        for extension in &extensions {
+            let same = extension.at_iteration == trained
+                && config.extension_iterations(number, spent, trained).ok() == Some(extension.added_iterations);
+            if !same {
+                return false;
+            }
+            trained += extension.added_iterations;
         }
         if number < started {
-            let outcome: Result<StageOutcome, _> =
-                flapper_files::read_json(&stage_dir(dir, number).join("selected.json"));
+            let outcome: Result<StageOutcome, _> = flapper_files::read_json(&here.join("selected.json"));
             let Ok(outcome) = outcome else { return false };
+            if before != budget {
+                return false;
+            }
             spent += outcome.env_steps;
+        } else if saved_checkpoints(&here).last().is_some_and(|(iteration, _)| *iteration > trained) {
+            return false;
         }
     }
     true
@@ -322,10 +340,18 @@ fn run_stage(
         };
         let added = config.extension_iterations(number, spent_env_steps, iterations).map_err(RunError::from)?;
         if added == 0 {
-            stopped_because = Some(format!(
-                "{reason}, but the run's max_env_steps leaves no room for another {} iterations after the later stages' budgets",
-                stage.validate_every
-            ));
+            let half = stage.max_iterations / 2;
+            stopped_because = Some(if half < stage.validate_every {
+                format!(
+                    "{reason}, but half its max_iterations ({half}) is less than one validation interval ({})",
+                    stage.validate_every
+                )
+            } else {
+                format!(
+                    "{reason}, but the run's max_env_steps leaves no room for another {} iterations after the later stages' budgets",
+                    stage.validate_every
+                )
+            });
             break;
         }
         let reason = match restart_noise_std {
@@ -709,4 +735,23 @@ pub fn describe_gate(gate: &Gate) -> String {
         text.push_str(&format!(", from iteration {} on", gate.min_iterations));
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn extension(at_iteration: usize, restart_noise_std: Option<f32>) -> Extension {
+        Extension { at_iteration, added_iterations: 100, reason: String::new(), restart_noise_std }
+    }
+
+    #[test]
+    fn a_restart_is_due_only_from_the_checkpoint_it_began_at() {
+        let restarted = [extension(3200, None), extension(3300, Some(0.4))];
+        assert_eq!(restart_due(&restarted, 3300), Some(0.4), "no checkpoint since the restart: restart again");
+        assert_eq!(restart_due(&restarted, 3350), None, "a checkpoint since: resume it");
+        assert_eq!(restart_due(&restarted[..1], 3200), None, "an extension is no restart");
+        assert_eq!(restart_due(&[extension(3200, Some(0.4)), extension(3300, None)], 3200), None, "an earlier one");
+        assert_eq!(restart_due(&[], 3200), None);
+    }
 }

@@ -310,6 +310,9 @@ fn a_stalled_stage_restarts_its_exploration_once_where_asked_and_else_stops_sayi
     let raised = run(&tight, &budgeted(512), None).unwrap_err();
     assert!(raised.contains("after its exploration had been restarted once already"), "{raised}");
     assert_eq!(summary(&tight)["stopped"]["extensions"][0]["added_iterations"], 4);
+    // Lowered so far that the recorded restart would not have been given (no room at 400): refused.
+    let lowered = run(&tight, &budgeted(400), None).unwrap_err();
+    assert!(lowered.contains("max_env_steps, which would change the budget"), "{lowered}");
     std::fs::remove_dir_all(tight).unwrap();
 
     // Interrupted after the restart was decided and before its first checkpoint: it restarts again.
