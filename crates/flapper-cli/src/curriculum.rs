@@ -125,8 +125,10 @@ fn report_progress(event: Progress) {
                     format!(", glide fraction {glide:.2}, energy {energy:.2} x scripted, cruise flap {hz:.2} Hz"),
                 _ => String::new(),
             },
-            match outcome.identification_met {
-                Some(false) =>
+            match (outcome.flight_modes_met, outcome.identification_met) {
+                (Some(false), _) =>
+                    "; warning: no checkpoint met the flight-mode bars (energy, glide, flap frequency) within the budget, this one tracks every reference the most efficiently",
+                (_, Some(false)) =>
                     "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",
                 _ => "",
             }

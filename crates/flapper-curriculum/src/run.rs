@@ -389,6 +389,9 @@ fn next_round(
         return Ok((described, None));
     }
     match stage.restart_noise_std {
+        Some(_) if selection.most_efficient_tracking(&stage.gate).is_some() => {
+            Err(format!("{described}; it tracks every reference, so its exploration is not restarted"))
+        }
         None => Err(format!("{described}; the stage restarts no exploration (its restart_noise_std is not set)")),
         Some(_) if extensions.iter().any(|e| e.restart_noise_std.is_some()) => {
             Err(format!("{described}, after its exploration had been restarted once already"))
@@ -488,6 +491,20 @@ fn choose<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<(&'a V
     }
 }
 
+/// What a stage that will train no more hands over: [`choose`]'s checkpoint, else, where the gate's
+/// flight-mode bars are sought, the most efficient checkpoint that meets every tracking bar. With whether
+/// the identification was met (`None`: not asked) and whether the flight modes were (`None`: met or not asked).
+fn choose_at_the_end<'a>(
+    stage: &'a StageConfig,
+    selection: &'a Selection,
+) -> Option<(&'a Validated, Option<bool>, Option<bool>)> {
+    if let Some((best, identified)) = choose(stage, selection) {
+        return Some((best, identified, None));
+    }
+    let identified = stage.gate.identification_fit_percent.map(|_| false);
+    selection.most_efficient_tracking(&stage.gate).map(|best| (best, identified, Some(false)))
+}
+
 /// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the
 /// mean of the weights of the stage's last `averaged` checkpoints up to it
 /// ([`crate::config::StageConfig::average_checkpoints`]), written once to `averaged/` in the stage's
@@ -554,10 +571,10 @@ fn select(
         .map_err(|message| CurriculumError::File { path: here.join("training.csv"), message })?;
     let last = history.last();
     let iterations = last.map_or(0, |l| l.iteration);
-    let chosen = choose(stage, selection);
+    let chosen = choose_at_the_end(stage, selection);
     let env_steps = last.map_or(0, |l| l.env_steps);
     let wall_time_s = stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations);
-    let Some((best, identification_met)) = chosen else {
+    let Some((best, identification_met, flight_modes_met)) = chosen else {
         let best = selection.best();
         let stopped = StoppedStage {
             stage: number,
@@ -601,6 +618,7 @@ fn select(
         checkpoint,
         extensions,
         identification_met,
+        flight_modes_met,
         glide_fraction: best.modes.map(|f| f.glide_fraction),
         energy_ratio: best.modes.map(|f| f.energy_ratio),
         cruise_flap_hz: best.modes.map(|f| f.cruise_flap_hz),

@@ -181,6 +181,37 @@ impl Selection {
         best(self.rows.iter().filter(|r| meets_flight_bars(gate, r)))
     }
 
+    /// Where the gate's flight-mode bars are sought ([`Gate::flight_modes_required`] unset): among the
+    /// checkpoints that meet every tracking bar (from `min_iterations` on), the one that meets the most
+    /// flight-mode bars, then flies with the least energy per metre (the best score, then the earliest, of
+    /// equals). `None` where the gate asks no flight mode, requires them, or no checkpoint tracks.
+    pub fn most_efficient_tracking<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        if !gate_asks_flight_modes(gate) || gate.flight_modes_required {
+            return None;
+        }
+        let tracking = self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate));
+        let bars_met = |r: &Validated| {
+            let Some(f) = r.modes.as_ref() else { return 0 };
+            [
+                gate.glide_fraction.is_some_and(|bar| f.glide_fraction >= bar),
+                gate.max_energy_ratio.is_some_and(|bar| f.energy_ratio <= bar),
+                gate.cruise_flap_hz.is_some_and(|[low, high]| (low..=high).contains(&f.cruise_flap_hz)),
+            ]
+            .into_iter()
+            .filter(|&met| met)
+            .count()
+        };
+        // Unmeasured or not flown to its end (NaN): the least efficient.
+        let energy = |r: &Validated| match r.modes.as_ref().map(|f| f.energy_ratio) {
+            Some(ratio) if ratio.is_finite() => ratio,
+            _ => f64::INFINITY,
+        };
+        let most = tracking.clone().map(bars_met).max()?;
+        let candidates: Vec<&Validated> = tracking.filter(|r| bars_met(r) == most).collect();
+        let least = candidates.iter().map(|r| energy(r)).fold(f64::INFINITY, f64::min);
+        best(candidates.into_iter().filter(|r| energy(r) == least))
+    }
+
     /// The best checkpoint of all, gate or not.
     pub fn best(&self) -> Option<&Validated> {
         best(self.rows.iter())
@@ -338,6 +369,11 @@ pub struct StageOutcome {
     /// none. `false` when no checkpoint met it within the budget and the best flying one was handed over.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification_met: Option<bool>,
+    /// `false` where no checkpoint met the gate's flight-mode bars within the budget and the most efficient
+    /// one that meets every tracking bar was handed over ([`crate::config::Gate::flight_modes_required`]);
+    /// absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flight_modes_met: Option<bool>,
     /// The selected checkpoint's flight modes ([`crate::flight_modes`]): its glide fraction, energy ratio
     /// and cruise flap frequency; absent where the gate has no flight-mode bar.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -408,6 +444,36 @@ mod tests {
             modes: None,
             identification_fit_percent: None,
         }
+    }
+
+    #[test]
+    fn sought_flight_modes_fall_back_to_the_most_efficient_tracking_checkpoint() {
+        let with = |iteration, completed, energy_ratio: f64, cruise_flap_hz| Validated {
+            modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz }),
+            ..row(iteration, completed, 0.2)
+        };
+        let selection = Selection {
+            rows: vec![
+                with(100, 10, 1.10, 5.0), // before min_iterations
+                with(200, 8, 1.15, 5.0),  // does not track
+                with(300, 10, 1.30, 6.5), // the flap out of its range
+                with(400, 10, 1.40, 5.0),
+                with(500, 10, 1.24, 5.9),
+                with(600, 10, f64::NAN, 5.0), // not flown to its end
+            ],
+            columns: GateColumns::default(),
+        };
+        let gate = Gate {
+            max_energy_ratio: Some(1.2),
+            cruise_flap_hz: Some([4.0, 6.0]),
+            min_iterations: 200,
+            ..Gate::completing(90.0)
+        };
+        assert!(selection.best_meeting(&gate).is_none(), "no checkpoint meets 1.2 x");
+        assert_eq!(selection.most_efficient_tracking(&gate).map(|r| r.iteration), Some(500), "flap met, least energy");
+        let required = Gate { flight_modes_required: true, ..gate.clone() };
+        assert!(selection.most_efficient_tracking(&required).is_none(), "required: no fallback");
+        assert!(selection.most_efficient_tracking(&Gate::completing(90.0)).is_none(), "no flight-mode bar asked");
     }
 
     #[test]

@@ -387,10 +387,20 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
 #[test]
 fn flight_mode_bars_measure_every_checkpoint_and_stop_a_stage_that_never_glides() {
     let dir = scratch("glide");
-    let gate =
-        "gate = { completed_percent = 0, glide_fraction = 0.5, max_energy_ratio = 1.5, cruise_flap_hz = [4.0, 6.0] }";
-    let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
-    // Four iterations cannot fly the longitudinal reference: no checkpoint glides, the stage stops.
+    let bars = "glide_fraction = 0.5, max_energy_ratio = 1.5, cruise_flap_hz = [4.0, 6.0]";
+    // Sought (the default): the stage tracks (0% asked) and hands over its most efficient checkpoint,
+    // marked as not meeting the flight modes.
+    let sought =
+        TINY.replacen("gate = { completed_percent = 0 }", &format!("gate = {{ completed_percent = 0, {bars} }}"), 1);
+    assert_eq!(run(&dir, &sought, Some(1)).unwrap(), 1);
+    let selected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stage_dir(&dir, 1).join("selected.json")).unwrap()).unwrap();
+    assert_eq!(selected["flight_modes_met"], false, "{selected}");
+    assert_eq!(selected["iterations"], 4, "the whole budget sought the flight modes: {selected}");
+    std::fs::remove_dir_all(&dir).unwrap();
+    // Required: four iterations cannot fly the longitudinal reference, no checkpoint glides, the stage stops.
+    let gate = format!("gate = {{ completed_percent = 0, {bars}, flight_modes_required = true }}");
+    let text = TINY.replacen("gate = { completed_percent = 0 }", &gate, 1);
     let e = run(&dir, &text, None).unwrap_err();
     assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("glide segment (flapper modes)"), "{e}");
     assert!(e.contains("no checkpoint flew the longitudinal reference to its end for its glide (bar 0.5)"), "{e}");
@@ -404,8 +414,8 @@ fn flight_mode_bars_measure_every_checkpoint_and_stop_a_stage_that_never_glides(
     assert_eq!(run(&dir, &text, None).unwrap_err(), e, "read back, the table gives the same verdict");
     std::fs::remove_dir_all(&dir).unwrap();
     // A bar of 0 is met by any flight that ends, not by one that fails: it still stops.
-    let text =
-        TINY.replacen("gate = { completed_percent = 0 }", "gate = { completed_percent = 0, glide_fraction = 0 }", 1);
+    let gate = "gate = { completed_percent = 0, glide_fraction = 0, flight_modes_required = true }";
+    let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
     assert!(run(&dir, &text, None).unwrap_err().contains("missed its gate"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
