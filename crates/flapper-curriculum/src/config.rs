@@ -133,6 +133,11 @@ pub struct RandomizedValidation {
 }
 
 impl StageConfig {
+    /// The stage less `restart_noise_std`, which says only what it does once its budget is spent.
+    pub fn without_restart(&self) -> StageConfig {
+        StageConfig { restart_noise_std: None, ..self.clone() }
+    }
+
     /// The fewest iterations the stage can hand over after: one validation interval, or its gate's
     /// `min_iterations` where that is later (a budget that leaves less stops the run before the stage).
     pub fn least_iterations(&self) -> usize {
@@ -612,8 +617,10 @@ task = { stage = 2 }
         // once stages 4-5 are reserved; 42 M leave 1200 iterations.
         let restart = shipped("experiments/curriculum-restart-stalled.toml");
         assert_eq!(restart.stages[2].restart_noise_std, Some(0.4));
-        let but_restart = |s: &StageConfig| StageConfig { restart_noise_std: None, ..s.clone() };
-        assert!(restart.stages.iter().map(but_restart).eq(five.stages.iter().cloned()), "the shipped stages otherwise");
+        assert!(
+            restart.stages.iter().map(StageConfig::without_restart).eq(five.stages.iter().cloned()),
+            "the shipped stages otherwise"
+        );
         let seed2_before_stage3 = 227 * 6144;
         assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 0);
         assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1200);

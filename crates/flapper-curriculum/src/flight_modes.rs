@@ -78,9 +78,21 @@ pub fn meets_flight_mode_bars(gate: &Gate, figures: Option<&ModeFigures>) -> boo
         return true;
     }
     let Some(f) = figures else { return false };
-    gate.glide_fraction.is_none_or(|bar| f.glide_fraction >= bar)
-        && gate.max_energy_ratio.is_none_or(|bar| f.energy_ratio <= bar)
-        && gate.cruise_flap_hz.is_none_or(|[low, high]| (low..=high).contains(&f.cruise_flap_hz))
+    flight_mode_verdicts(gate, f).into_iter().all(|met| met != Some(false))
+}
+
+/// How many of the gate's flight-mode bars `figures` meets (none where unmeasured).
+pub fn flight_mode_bars_met(gate: &Gate, figures: Option<&ModeFigures>) -> usize {
+    figures.map_or(0, |f| flight_mode_verdicts(gate, f).into_iter().filter(|&met| met == Some(true)).count())
+}
+
+/// Each flight-mode bar, met or not (`None`: the gate does not ask it): the glide, the energy, the flap frequency.
+fn flight_mode_verdicts(gate: &Gate, f: &ModeFigures) -> [Option<bool>; 3] {
+    [
+        gate.glide_fraction.map(|bar| f.glide_fraction >= bar),
+        gate.max_energy_ratio.map(|bar| f.energy_ratio <= bar),
+        gate.cruise_flap_hz.map(|[low, high]| (low..=high).contains(&f.cruise_flap_hz)),
+    ]
 }
 
 #[cfg(test)]

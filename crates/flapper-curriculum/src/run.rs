@@ -177,8 +177,7 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
 /// continued in its folder.
 fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool {
     let Some(stage) = b.stages.get(number - 1) else { return false };
-    let but_restart = |s: &StageConfig| StageConfig { restart_noise_std: None, ..s.clone() };
-    but_restart(stage) == but_restart(&a.stages[number - 1])
+    stage.without_restart() == a.stages[number - 1].without_restart()
         && match (a.stage_train_config(number), b.stage_train_config(number)) {
             (Ok(x), Ok(y)) => x == y,
             _ => false,

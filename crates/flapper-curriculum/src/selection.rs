@@ -7,7 +7,7 @@ use flapper_analysis::sysid::AXES;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Gate;
-use crate::flight_modes::{ModeFigures, gate_asks_flight_modes, meets_flight_mode_bars};
+use crate::flight_modes::{ModeFigures, flight_mode_bars_met, gate_asks_flight_modes, meets_flight_mode_bars};
 use crate::identification::meets_identification_bar;
 use crate::validation::{ReferenceScore, Score};
 
@@ -189,27 +189,21 @@ impl Selection {
         if !gate_asks_flight_modes(gate) || gate.flight_modes_required {
             return None;
         }
-        let tracking = self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate));
-        let bars_met = |r: &Validated| {
-            let Some(f) = r.modes.as_ref() else { return 0 };
-            [
-                gate.glide_fraction.is_some_and(|bar| f.glide_fraction >= bar),
-                gate.max_energy_ratio.is_some_and(|bar| f.energy_ratio <= bar),
-                gate.cruise_flap_hz.is_some_and(|[low, high]| (low..=high).contains(&f.cruise_flap_hz)),
-            ]
-            .into_iter()
-            .filter(|&met| met)
-            .count()
-        };
         // Unmeasured or not flown to its end (NaN): the least efficient.
         let energy = |r: &Validated| match r.modes.as_ref().map(|f| f.energy_ratio) {
             Some(ratio) if ratio.is_finite() => ratio,
             _ => f64::INFINITY,
         };
-        let most = tracking.clone().map(bars_met).max()?;
-        let candidates: Vec<&Validated> = tracking.filter(|r| bars_met(r) == most).collect();
-        let least = candidates.iter().map(|r| energy(r)).fold(f64::INFINITY, f64::min);
-        best(candidates.into_iter().filter(|r| energy(r) == least))
+        let tracking: Vec<(&Validated, usize, f64)> = self
+            .rows
+            .iter()
+            .filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate))
+            .map(|r| (r, flight_mode_bars_met(gate, r.modes.as_ref()), energy(r)))
+            .collect();
+        let most = tracking.iter().map(|&(_, met, _)| met).max()?;
+        let least =
+            tracking.iter().filter(|&&(_, met, _)| met == most).map(|&(_, _, e)| e).fold(f64::INFINITY, f64::min);
+        best(tracking.into_iter().filter(|&(_, met, e)| met == most && e == least).map(|(r, _, _)| r))
     }
 
     /// The best checkpoint of all, gate or not.

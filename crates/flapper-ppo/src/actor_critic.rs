@@ -61,6 +61,12 @@ impl ActorCritic {
         actions.extend_from_slice(mean);
     }
 
+    /// Sets every action's noise (standard deviation) to `std`; the log from `libm`, as everywhere in
+    /// training, not the platform's (glibc's `logf` differs from it in the last bit for some values).
+    pub fn set_noise_std(&mut self, std: f32) {
+        self.log_std.fill(libm::logf(std));
+    }
+
     /// Mean standard deviation over actions.
     pub fn mean_std(&self) -> f32 {
         self.log_std.iter().map(|&s| libm::expf(s)).sum::<f32>() / self.log_std.len() as f32

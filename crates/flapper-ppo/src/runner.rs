@@ -108,7 +108,7 @@ impl<E: VecEnv> Trainer<E> {
                 };
                 let mut ppo = resumed_learner(loaded, ppo_config, &runner);
                 if let Start::Restart { noise_std } = start {
-                    ppo.policy.log_std.iter_mut().for_each(|s| *s = noise_std.ln());
+                    ppo.policy.set_noise_std(noise_std);
                 }
                 (folder, ppo)
             }
@@ -315,7 +315,7 @@ fn learner_from(loaded: checkpoint::Checkpoint, ppo_config: PpoConfig, runner: &
         ppo.optimizer = optimizer;
     }
     if let Some(std) = runner.init_from_noise_std {
-        ppo.policy.log_std.iter_mut().for_each(|s| *s = std.ln());
+        ppo.policy.set_noise_std(std);
     }
     ppo
 }
