@@ -260,6 +260,14 @@ pub struct InitialStateConfig {
     pub pitch_deg: f64,
     /// Uniform offset of roll, pitch and yaw (relative to the reference heading).
     pub attitude_offset_deg: f64,
+    /// Training paths only: the share of episodes that start somewhere along the drawn path instead of
+    /// at its beginning (inside a loop, halfway through a turn), on the path at its speed, with the
+    /// attitude whose lift would bend the path there; the offsets above still apply. 0 by default (every
+    /// episode starts at the path's beginning, and no random number is drawn for it). A policy that has
+    /// never flown the top of a loop meets it only by getting there; starting there shows it at once
+    /// (DeepMimic's reference state initialization). Needs `episode.attitude_termination = false` to be of
+    /// use in the manoeuvres (an inverted start would end at once).
+    pub path_start_probability: f64,
 }
 
 /// Paper III-E, Table III: per-episode dynamics randomization. A scale interval of [1, 1] or an
@@ -384,7 +392,13 @@ impl Default for ReferenceConfig {
 
 impl Default for InitialStateConfig {
     fn default() -> Self {
-        Self { position_offset_m: [0.5, 0.5, 0.5], speed_offset_mps: 0.5, pitch_deg: 20.0, attitude_offset_deg: 10.0 }
+        Self {
+            position_offset_m: [0.5, 0.5, 0.5],
+            speed_offset_mps: 0.5,
+            pitch_deg: 20.0,
+            attitude_offset_deg: 10.0,
+            path_start_probability: 0.0,
+        }
     }
 }
 
@@ -513,6 +527,7 @@ impl TaskConfig {
             ("initial_state.speed_offset_mps", i.speed_offset_mps, 0.0, 10.0),
             ("initial_state.pitch_deg", i.pitch_deg, -90.0, 90.0),
             ("initial_state.attitude_offset_deg", i.attitude_offset_deg, 0.0, 180.0),
+            ("initial_state.path_start_probability", i.path_start_probability, 0.0, 1.0),
             ("episode.attitude_limit_deg", self.episode.attitude_limit_deg, 1.0, 180.0),
             ("episode.max_position_error_m", self.episode.max_position_error_m, 0.01, 100.0),
             ("reference.command_duration_s", f.command_duration_s, 0.1, 60.0),

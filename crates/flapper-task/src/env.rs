@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use flapper_sim::{InitialState, ModelError, RobotModel, Vec3, quat_from_euler, quat_to_euler};
+use flapper_sim::{InitialState, ModelError, Quat, RobotModel, Vec3, quat_from_euler, quat_to_euler};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -25,6 +25,30 @@ pub enum ReferenceSource {
     Procedural,
     /// The same path every episode (evaluation: a named reference or a CSV).
     Fixed(Arc<Reference>),
+}
+
+/// A start along the path leaves at least this much of it to fly (two of the paper's 3 s commands).
+pub const PATH_START_MIN_REMAINING_S: f64 = 6.0;
+
+/// Gravity's acceleration (m/s^2), for the attitude a path asks.
+const GRAVITY_MPS2: f64 = 9.81;
+
+/// The attitude a path asks at its first point: body x along the direction of travel, body z (the lift's
+/// side) along the part of the specific force (the path's acceleration plus gravity's support) across it;
+/// world up across the path where that part vanishes (straight flight), +y where the path is vertical too.
+/// Level straight flight gives a level attitude; a coordinated turn a bank into it; the top of a tight loop
+/// an inverted one.
+pub fn path_frame(reference: &Reference) -> Quat {
+    let forward = reference.direction(0);
+    let acceleration = (reference.velocity(2) - reference.velocity(0)) / (2.0 * reference.dt_s());
+    let specific_force = acceleration + Vec3::Z * GRAVITY_MPS2;
+    let across = |v: Vec3| v - forward * v.dot(forward);
+    let up = across(specific_force)
+        .try_normalize()
+        .or_else(|| across(Vec3::Z).try_normalize())
+        .unwrap_or_else(|| forward.any_orthonormal_vector());
+    let left = up.cross(forward);
+    Quat::from_mat3(&glam::DMat3::from_cols(forward, left, up)).normalize()
 }
 
 /// The result of one control step.
@@ -169,13 +193,16 @@ impl FlightEnv {
         let lookahead = self.config.observation.lookahead_steps;
         self.reference = match &self.source {
             ReferenceSource::Fixed(reference) => reference.clone(),
-            ReferenceSource::Procedural => Arc::new(procedural(
-                &self.config.reference,
-                self.config.episode.max_steps as f64 * dt,
-                (lookahead + 1) as f64 * dt,
-                dt,
-                &mut self.rng,
-            )),
+            ReferenceSource::Procedural => {
+                let path = procedural(
+                    &self.config.reference,
+                    self.config.episode.max_steps as f64 * dt,
+                    (lookahead + 1) as f64 * dt,
+                    dt,
+                    &mut self.rng,
+                );
+                Arc::new(self.draw_path_start(path, lookahead))
+            }
         };
         self.drawn = randomize(self.control.sim_mut(), &self.config.randomization, &mut self.rng)?;
         let initial = self.draw_initial_state();
@@ -187,6 +214,22 @@ impl FlightEnv {
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
         Ok(())
+    }
+
+    /// With `initial_state.path_start_probability`, the drawn path from a random step on (the episode
+    /// starts there); else the path as drawn. Draws nothing when the probability is 0.
+    fn draw_path_start(&mut self, path: Reference, lookahead_steps: usize) -> Reference {
+        let probability = self.config.initial_state.path_start_probability;
+        if probability <= 0.0 || !self.rng.random_bool(probability) {
+            return path;
+        }
+        let remaining = (PATH_START_MIN_REMAINING_S / path.dt_s()).round() as usize;
+        let last_start = path.steps_with_full_lookahead(lookahead_steps).saturating_sub(remaining);
+        if last_start == 0 {
+            return path;
+        }
+        let start = self.rng.random_range(0..=last_start);
+        Reference::new(path.name(), path.dt_s(), path.points()[start..].to_vec())
     }
 
     fn draw_initial_state(&mut self) -> InitialState {
@@ -201,10 +244,22 @@ impl FlightEnv {
         let speed = (self.reference.speed(0) + symmetric(c.speed_offset_mps)).max(0.0);
         let attitude = c.attitude_offset_deg.to_radians();
         let (roll, pitch, yaw) = (symmetric(attitude), symmetric(attitude), symmetric(attitude));
+        let position_m = self.reference.target(0) + offset;
+        if c.path_start_probability > 0.0 && matches!(self.source, ReferenceSource::Procedural) {
+            // On the path: along its direction at its speed, turned about the direction of travel so that
+            // the lift would bend the path as it bends there (the level start below is this for a level path).
+            let along = path_frame(&self.reference);
+            return InitialState {
+                position_m,
+                orientation: along * quat_from_euler(roll, c.pitch_deg.to_radians() + pitch, yaw),
+                linear_velocity_mps: self.reference.direction(0) * speed,
+                ..InitialState::default()
+            };
+        }
         let direction = self.reference.direction(0);
         let heading = direction.y.atan2(direction.x);
         InitialState {
-            position_m: self.reference.target(0) + offset,
+            position_m,
             orientation: quat_from_euler(roll, c.pitch_deg.to_radians() + pitch, heading + yaw),
             linear_velocity_mps: Vec3::new(heading.cos(), heading.sin(), 0.0) * speed,
             ..InitialState::default()

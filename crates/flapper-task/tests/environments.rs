@@ -578,3 +578,80 @@ fn the_energy_in_steep_dives_is_priced_by_its_share_and_glide_slopes_are_not_div
         assert_eq!(step.terms, flown(sloped(vertical), 1.0).1.terms, "{what}: the kernel itself, bit for bit");
     }
 }
+
+/// A circle of radius `radius_m` flown at `speed_mps`, starting at `start_rad` of its way round, in the
+/// vertical x-z plane (a back-flip: climbing first) or, `level`, in the horizontal plane (turning left).
+fn circle(radius_m: f64, speed_mps: f64, start_rad: f64, level: bool) -> Reference {
+    let rate = speed_mps / radius_m;
+    let points = (0..200)
+        .map(|k| {
+            let angle = start_rad + rate * 0.02 * k as f64;
+            if level {
+                Vec3::new(radius_m * angle.sin(), radius_m * (1.0 - angle.cos()), 10.0)
+            } else {
+                Vec3::new(radius_m * angle.sin(), 0.0, 10.0 + radius_m * (1.0 - angle.cos()))
+            }
+        })
+        .collect();
+    Reference::new("circle", 0.02, points)
+}
+
+#[test]
+fn the_attitude_a_path_asks_is_level_on_a_straight_path_banked_in_a_turn_and_inverted_atop_a_tight_loop() {
+    use flapper_sim::quat_to_euler;
+    use flapper_task::env::path_frame;
+    // Straight and level, heading north: no roll, no pitch, yaw 90 deg.
+    let [roll, pitch, yaw] = quat_to_euler(path_frame(&northbound()));
+    assert!(roll.abs() < 1e-9 && pitch.abs() < 1e-9 && (yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+    // A straight climb: the nose along the path, no roll.
+    let [roll, pitch, _] = quat_to_euler(path_frame(&sloped(1.0)));
+    assert!(roll.abs() < 1e-9 && (pitch - (1.0f64 / 3.8).atan()).abs() < 1e-9, "{roll} {pitch}");
+    // A level left turn at 4 m/s on a 5 m radius: the coordinated bank, left wing down (roll < 0).
+    let [roll, pitch, _] = quat_to_euler(path_frame(&circle(5.0, 4.0, 0.3, true)));
+    let bank = (4.0f64 * 4.0 / 5.0 / 9.81).atan();
+    assert!((roll + bank).abs() < 0.01 && pitch.abs() < 0.01, "roll {roll}, expected {}", -bank);
+    // The top of a 1.2 m loop at 4 m/s (13.3 m/s^2 towards its centre, more than gravity): flying
+    // backwards, inverted, the lift's side down; the bottom of the same loop: upright.
+    let top = path_frame(&circle(1.2, 4.0, std::f64::consts::PI, false));
+    assert!((top * Vec3::X).x < -0.99 && (top * Vec3::Z).z < -0.99, "top: {:?}", top * Vec3::Z);
+    let bottom = path_frame(&circle(1.2, 4.0, 0.0, false));
+    assert!((bottom * Vec3::X).x > 0.99 && (bottom * Vec3::Z).z > 0.99);
+    // A vertical climb in the loop: the lift's side points to the loop's centre (behind).
+    let side = path_frame(&circle(1.2, 4.0, std::f64::consts::FRAC_PI_2, false));
+    assert!((side * Vec3::X).z > 0.99 && (side * Vec3::Z).x < -0.99);
+    // Every frame is a rotation.
+    for q in [top, bottom, side] {
+        assert!((q.length() - 1.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn training_episodes_start_along_the_path_where_asked_and_fixed_references_never_do() {
+    let full = |config: &TaskConfig| config.episode.max_steps + config.observation.lookahead_steps + 2;
+    let mut config = exact_start(TaskConfig::stage(3).unwrap());
+    config.initial_state.path_start_probability = 1.0;
+    let config = Arc::new(config);
+    let mut shortened = 0;
+    for index in 0..8 {
+        let env = FlightEnv::new(&robot(), config.clone(), ReferenceSource::Procedural, 7, index).unwrap();
+        let (reference, sim) = (env.reference(), env.control().sim());
+        shortened += usize::from(reference.len() + 10 < full(&config));
+        // At least 6 s of path left to fly, on it, along it, at its speed.
+        assert!(reference.duration_s() >= flapper_task::env::PATH_START_MIN_REMAINING_S);
+        assert!((sim.base_position_m() - reference.target(0)).length() < 1e-9);
+        let velocity = sim.linear_velocity_mps();
+        assert!((velocity - reference.velocity(0)).length() < 1e-6 * reference.speed(0).max(1.0), "{velocity:?}");
+        assert_eq!(sim.orientation(), flapper_task::env::path_frame(reference));
+    }
+    assert!(shortened >= 7, "only {shortened} of 8 episodes started along the path");
+
+    // Without it every training path is flown whole; a fixed reference is flown whole either way.
+    let whole = Arc::new(exact_start(TaskConfig::stage(3).unwrap()));
+    for index in 0..4 {
+        let env = FlightEnv::new(&robot(), whole.clone(), ReferenceSource::Procedural, 7, index).unwrap();
+        assert!(env.reference().len() + 10 >= full(&whole), "{} of {}", env.reference().len(), full(&whole));
+    }
+    let env = FlightEnv::new(&robot(), config, ReferenceSource::Fixed(northbound()), 7, 0).unwrap();
+    assert_eq!(env.reference().len(), northbound().len());
+    assert!((env.control().sim().base_position_m() - northbound().target(0)).length() < 1e-9);
+}
