@@ -634,6 +634,22 @@ task = { stage = 2 }
         assert_eq!(restarted.runner.init_from_noise_std, Some(0.4), "the noise restarted");
         assert_eq!(restarted.task.control.action_mode, flapper_task::config::ActionMode::FlapOscillator);
         assert_eq!(oscillator.stages[3].validation, oscillator.stages[2].validation, "stage 3's, copied");
+
+        // Stage 3's episodes starting along their paths, and nothing else changed; the second adds the restart.
+        let path_starts = shipped("experiments/curriculum-path-starts.toml");
+        let starts: Vec<f64> = (1..=5)
+            .map(|k| path_starts.stage_train_config(k).unwrap().task.initial_state.path_start_probability)
+            .collect();
+        assert_eq!(starts, [0.0, 0.0, 0.5, 0.0, 0.0]);
+        assert!(path_starts.stages.iter().zip(&five.stages).enumerate().all(|(k, (a, b))| (k == 2) != (a == b)));
+        assert_eq!(path_starts.max_env_steps, five.max_env_steps);
+        check_budget(&path_starts, "curriculum-path-starts.toml");
+        let path_restart = shipped("experiments/curriculum-path-starts-restart.toml");
+        assert!(path_restart.stages.iter().map(StageConfig::without_restart).eq(path_starts.stages.iter().cloned()));
+        assert_eq!(
+            (path_restart.stages[2].restart_noise_std, path_restart.max_env_steps),
+            (Some(0.4), Some(42_000_000))
+        );
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
