@@ -687,7 +687,7 @@ fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ra
     assert_eq!(scripted_row.longitudinal_j_per_m, at(3, by_scripted.energy_per_metre_j));
     assert_eq!(scripted_row.energy_ratio, Some(1.0), "the scripted gait against itself");
     // The final controller flaps through the glide segment (`flapper modes`: 0.00), at the paper's 4-6 Hz in
-    // the cruise (its fifth stage's gate asks it; 4.50 Hz over 100 episodes), and flies the rest.
+    // the cruise (its fifth stage's gate asks it; 5.22 Hz over 100 episodes), and flies the rest.
     assert_eq!(final_row.glide_fraction, Some(0.0));
     assert!(final_row.cruise_flap_hz.is_some_and(|hz| (4.0..=6.0).contains(&hz)), "{final_row:?}");
     assert_eq!(final_row.level3_episodes, Some(2));

@@ -580,6 +580,13 @@ task = { stage = 2 }
     fn the_shipped_curriculum_reads_and_fits_the_papers_budget() {
         let c = shipped("curriculum.toml");
         assert_eq!(task_stages(&c), [1, 2, 3, 4, 4], "the paper's four stages in order, then the efficient flight");
+        let path_starts: Vec<f64> =
+            (1..=5).map(|k| c.stage_train_config(k).unwrap().task.initial_state.path_start_probability).collect();
+        assert_eq!(
+            path_starts,
+            [0.0, 0.0, 0.5, 0.0, 0.0],
+            "stage 3's episodes start along their paths, and no other's"
+        );
         let efficient = c.stage_train_config(5).unwrap();
         assert!(efficient.ppo.smoothness_coef > 0.0 && efficient.task.reference.glide_probability > 0.0);
         let gate = &c.stages[4].gate;
@@ -635,21 +642,17 @@ task = { stage = 2 }
         assert_eq!(restarted.task.control.action_mode, flapper_task::config::ActionMode::FlapOscillator);
         assert_eq!(oscillator.stages[3].validation, oscillator.stages[2].validation, "stage 3's, copied");
 
-        // Stage 3's episodes starting along their paths, and nothing else changed; the second adds the restart.
-        let path_starts = shipped("experiments/curriculum-path-starts.toml");
-        let starts: Vec<f64> = (1..=5)
-            .map(|k| path_starts.stage_train_config(k).unwrap().task.initial_state.path_start_probability)
-            .collect();
-        assert_eq!(starts, [0.0, 0.0, 0.5, 0.0, 0.0]);
-        assert!(path_starts.stages.iter().zip(&five.stages).enumerate().all(|(k, (a, b))| (k == 2) != (a == b)));
-        assert_eq!(path_starts.max_env_steps, five.max_env_steps);
-        check_budget(&path_starts, "curriculum-path-starts.toml");
-        let path_restart = shipped("experiments/curriculum-path-starts-restart.toml");
-        assert!(path_restart.stages.iter().map(StageConfig::without_restart).eq(path_starts.stages.iter().cloned()));
-        assert_eq!(
-            (path_restart.stages[2].restart_noise_std, path_restart.max_env_steps),
-            (Some(0.4), Some(42_000_000))
-        );
+        // The curriculum before stage 3's episodes started along their paths: stage 3 alone differs.
+        let without = shipped("experiments/curriculum-without-path-starts.toml");
+        let starts = |c: &CurriculumConfig| -> Vec<f64> {
+            (1..=c.stages.len())
+                .map(|k| c.stage_train_config(k).unwrap().task.initial_state.path_start_probability)
+                .collect()
+        };
+        assert_eq!(starts(&without), [0.0; 5]);
+        assert!(without.stages.iter().zip(&five.stages).enumerate().all(|(k, (a, b))| (k == 2) != (a == b)));
+        assert_eq!(without.max_env_steps, five.max_env_steps);
+        check_budget(&without, "curriculum-without-path-starts.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
