@@ -448,8 +448,11 @@ impl CurriculumConfig {
 
     /// The iterations stage `number` may add to its budget once it has trained `trained` of them (its
     /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
-    /// run's `max_env_steps` leaves after every later stage's own `max_iterations`; a multiple of
-    /// `validate_every` (0: no room).
+    /// run's `max_env_steps` leaves after the fewest iterations every later stage needs to hand over
+    /// ([`StageConfig::least_iterations`]); a multiple of `validate_every` (0: no room). Keeping back the
+    /// later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
+    /// stages' caps add up to more than the run's budget by design, so a heavier robot's stage 2 still
+    /// improving at its 400th iteration stopped the run with 27 M of the 30 M steps unspent.
     pub fn extension_iterations(
         &self,
         number: usize,
@@ -465,7 +468,7 @@ impl CurriculumConfig {
         if let Some(total) = self.max_env_steps {
             let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
             for later in number + 1..=self.stages.len() {
-                reserved += self.stages[later - 1].max_iterations as u64 * per_iteration(later)?;
+                reserved += self.stages[later - 1].least_iterations() as u64 * per_iteration(later)?;
             }
             room = room.min((total.saturating_sub(reserved) / per_iteration(number)?) as usize);
         }
@@ -542,13 +545,22 @@ task = { stage = 2 }
         let mut c = CurriculumConfig::from_toml(TINY, "tiny.toml").unwrap();
         // No run budget: half of stage 1's 4 iterations, a multiple of its validation interval (2).
         assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 2);
-        // Stage 1 takes 32 steps an iteration, stage 2 16 and keeps its 2 iterations (32 steps).
-        c.max_env_steps = Some(4 * 32 + 32 + 2 * 32);
+        // Stage 1 takes 32 steps an iteration; stage 2 16, and it needs 1 iteration to hand over (its
+        // validation interval; no min_iterations), so 16 steps are kept back for it, not its whole
+        // max_iterations (2, 32 steps).
+        assert_eq!(c.stages[1].least_iterations(), 1);
+        c.max_env_steps = Some(4 * 32 + 2 * 32 + 16);
         assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 2, "room for 2 more, half the budget caps it");
-        c.max_env_steps = Some(4 * 32 + 32 + 32);
+        c.max_env_steps = Some(4 * 32 + 32 + 16);
         assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "room for 1, not a whole validation interval");
-        c.max_env_steps = Some(4 * 32 + 32);
-        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "nothing beyond the later stage's budget");
+        c.max_env_steps = Some(4 * 32 + 16);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "nothing of what the later stage needs");
+        // A later stage's min_iterations is kept back whole: at 3 stage 2 needs 48 steps.
+        c.stages[1].gate.min_iterations = 3;
+        c.max_env_steps = Some(4 * 32 + 2 * 32 + 48);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 2);
+        c.max_env_steps = Some(4 * 32 + 2 * 32 + 32);
+        assert_eq!(c.extension_iterations(1, 0, 4).unwrap(), 0, "48 steps kept for stage 2 leave 1 iteration");
         // The last stage keeps nothing back: 1 iteration of 16 steps left after 64 spent and 2 trained.
         c.max_env_steps = Some(64 + 2 * 16 + 16);
         assert_eq!(c.extension_iterations(2, 64, 2).unwrap(), 1);
@@ -619,9 +631,10 @@ task = { stage = 2 }
         assert_eq!(slow.stages[4].gate, Gate { min_iterations: 400, ..Gate::completing(50.0) }, "written whole");
         check_budget(&slow, "curriculum-slow-flight.toml");
 
-        // The shipped curriculum with stage 3 restarting when stalled, and the budget a restart needs: after
-        // seed 2's stages 1-2 (227 iterations) and a stalled stage 3 (3200), the shipped 30 M leave no room
-        // once stages 4-5 are reserved; 42 M leave 1200 iterations.
+        // The shipped curriculum with stage 3 restarting when stalled, and the budget a restart has: after
+        // seed 2's stages 1-2 (227 iterations) and a stalled stage 3 (3200), 21.06 M steps, the shipped
+        // 30 M leave 800 iterations once stages 4-5 keep the 300 each needs; 42 M leave half the stage's
+        // budget, 1600.
         let restart = shipped("experiments/curriculum-restart-stalled.toml");
         assert_eq!(restart.stages[2].restart_noise_std, Some(0.4));
         assert!(
@@ -629,8 +642,11 @@ task = { stage = 2 }
             "the shipped stages otherwise"
         );
         let seed2_before_stage3 = 227 * 6144;
-        assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 0);
-        assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1200);
+        assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 800);
+        assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1600);
+        // A stage 2 still improving at its 400th iteration (a heavier robot's, after 126 of stage 1) may
+        // add half its budget: stages 3-5 keep 2000 + 300 + 300 iterations.
+        assert_eq!(five.extension_iterations(2, 126 * 6144, 400).unwrap(), 200);
 
         let oscillator = shipped("experiments/curriculum-oscillator.toml");
         assert_eq!(task_stages(&oscillator), [1, 2, 3, 3, 4]);

@@ -347,7 +347,7 @@ fn run_stage(
                 )
             } else {
                 format!(
-                    "{reason}, but the run's max_env_steps leaves no room for another {} iterations after the later stages' budgets",
+                    "{reason}, but the run's max_env_steps leaves no room for another {} iterations after the fewest the later stages need",
                     stage.validate_every
                 )
             });

@@ -304,7 +304,10 @@ fn a_stalled_stage_restarts_its_exploration_once_where_asked_and_else_stops_sayi
     let tight = scratch("restart-budget");
     let budgeted = |steps: u64| text.replacen("seed = 5\n", &format!("seed = 5\nmax_env_steps = {steps}\n"), 1);
     let no_room = run(&tight, &budgeted(384), None).unwrap_err();
-    assert!(no_room.contains("leaves no room for another 1 iterations after the later stages' budgets"), "{no_room}");
+    assert!(
+        no_room.contains("leaves no room for another 1 iterations after the fewest the later stages need"),
+        "{no_room}"
+    );
     let refused = run(&tight, &budgeted(200), None).unwrap_err();
     assert!(refused.contains("max_env_steps, which would change the budget of a stage it has started"), "{refused}");
     let raised = run(&tight, &budgeted(512), None).unwrap_err();
