@@ -588,14 +588,19 @@ task = { stage = 2 }
         (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect()
     }
 
+    /// Each stage's share of training episodes that start along their path.
+    fn path_start_probabilities(c: &CurriculumConfig) -> Vec<f64> {
+        (1..=c.stages.len())
+            .map(|k| c.stage_train_config(k).unwrap().task.initial_state.path_start_probability)
+            .collect()
+    }
+
     #[test]
     fn the_shipped_curriculum_reads_and_fits_the_papers_budget() {
         let c = shipped("curriculum.toml");
         assert_eq!(task_stages(&c), [1, 2, 3, 4, 4], "the paper's four stages in order, then the efficient flight");
-        let path_starts: Vec<f64> =
-            (1..=5).map(|k| c.stage_train_config(k).unwrap().task.initial_state.path_start_probability).collect();
         assert_eq!(
-            path_starts,
+            path_start_probabilities(&c),
             [0.0, 0.0, 0.5, 0.0, 0.0],
             "stage 3's episodes start along their paths, and no other's"
         );
@@ -660,12 +665,7 @@ task = { stage = 2 }
 
         // The curriculum before stage 3's episodes started along their paths: stage 3 alone differs.
         let without = shipped("experiments/curriculum-without-path-starts.toml");
-        let starts = |c: &CurriculumConfig| -> Vec<f64> {
-            (1..=c.stages.len())
-                .map(|k| c.stage_train_config(k).unwrap().task.initial_state.path_start_probability)
-                .collect()
-        };
-        assert_eq!(starts(&without), [0.0; 5]);
+        assert_eq!(path_start_probabilities(&without), [0.0; 5]);
         assert!(without.stages.iter().zip(&five.stages).enumerate().all(|(k, (a, b))| (k == 2) != (a == b)));
         assert_eq!(without.max_env_steps, five.max_env_steps);
         check_budget(&without, "curriculum-without-path-starts.toml");
