@@ -604,6 +604,8 @@ task = { stage = 2 }
             [0.0, 0.0, 0.5, 0.0, 0.0],
             "stage 3's episodes start along their paths, and no other's"
         );
+        let restarts: Vec<Option<f32>> = c.stages.iter().map(|s| s.restart_noise_std).collect();
+        assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None], "stalled, stages 3 and 4 restart");
         let efficient = c.stage_train_config(5).unwrap();
         assert!(efficient.ppo.smoothness_coef > 0.0 && efficient.task.reference.glide_probability > 0.0);
         let gate = &c.stages[4].gate;
@@ -636,19 +638,16 @@ task = { stage = 2 }
         assert_eq!(slow.stages[4].gate, Gate { min_iterations: 400, ..Gate::completing(50.0) }, "written whole");
         check_budget(&slow, "curriculum-slow-flight.toml");
 
-        // The shipped curriculum with stage 3 restarting when stalled, and the budget a restart has: after
-        // seed 2's stages 1-2 (227 iterations) and a stalled stage 3 (3200), 21.06 M steps, the shipped
-        // 30 M leave 800 iterations once stages 4-5 keep the 300 each needs; 42 M leave half the stage's
-        // budget, 1600.
+        // The shipped curriculum with a 42 M budget, and the budget a restart has: after seed 2's stages 1-2
+        // (227 iterations) and a stalled stage 3 (3200), 21.06 M steps, the shipped 30 M leave 800 iterations
+        // once stages 4-5 keep the 300 each needs; 42 M leave half the stage's budget, 1600. Seed 3's stage 4,
+        // stalled at 1000 after 3103 iterations of stages 1-3, gets 475 (stage 5 keeps 300).
         let restart = shipped("experiments/curriculum-restart-stalled.toml");
-        assert_eq!(restart.stages[2].restart_noise_std, Some(0.4));
-        assert!(
-            restart.stages.iter().map(StageConfig::without_restart).eq(five.stages.iter().cloned()),
-            "the shipped stages otherwise"
-        );
+        assert!(restart.stages == five.stages && restart.max_env_steps == Some(42_000_000), "the budget alone differs");
         let seed2_before_stage3 = 227 * 6144;
         assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 800);
         assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1600);
+        assert_eq!(five.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 475);
         // A stage 2 still improving at its 400th iteration (a heavier robot's, after 126 of stage 1) may
         // add half its budget: stages 3-5 keep 2000 + 300 + 300 iterations.
         assert_eq!(five.extension_iterations(2, 126 * 6144, 400).unwrap(), 200);
