@@ -3,6 +3,7 @@
 against the final controller's bars and write the table `policies/final/seeds.csv` asks for.
 
     scripts/seed-table.py --out seeds.csv RUN_DIR [RUN_DIR ...] [--robustness] [--sysid] [--frontier]
+    scripts/seed-table.py --out light.csv --model examples/robots/light.xml RUN_DIR   (another robot's run)
 
 For every folder (its `summary.json` and `policy.safetensors`): the eight named references flown from 100
 starts with seed 11 (`flapper eval --no-baseline`), and with --robustness the sweeps behind the robustness
@@ -14,7 +15,8 @@ level 3 m/s completed and RMS). Columns:
 seed, total_env_steps, total_wall_time_s, <reference>_completed (of 100), <reference>_rms_m, then
 nominal_bars_met and the optional robustness and sysid columns. A run that stopped at a missed gate (a
 summary, no policy) is a row of its own with empty flight columns and no bar met (its steps and time include
-the stage that missed): a seed that fails counts. Prints the table and how many seeds meet
+the stage that missed): a seed that fails counts. With --model every flight flies that robot (the MJCF the
+runs were trained on, `flapper curriculum --model`) and a first column `robot` names it. Prints the table and how many seeds meet
 every nominal bar. The flapper binary: $FLAPPER, else target/release/flapper.
 """
 
@@ -40,9 +42,13 @@ ROBUSTNESS_BARS = {"lateral_table3": 90, "lateral_fluid_all_0.3": 95, "longitudi
 SYSID_BAR_PERCENT = 80.0
 
 
+# `--model FILE` for every flight when the runs trained another robot than models/flapper.xml.
+MODEL_ARGS = []
+
+
 def flapper(args, scratch):
     binary = os.environ.get("FLAPPER", str(Path(__file__).resolve().parent.parent / "target/release/flapper"))
-    done = subprocess.run([binary, *args, "--out", str(scratch)], capture_output=True, text=True)
+    done = subprocess.run([binary, *args, *MODEL_ARGS, "--out", str(scratch)], capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"seed-table: flapper {' '.join(args)} failed: {done.stderr.strip().splitlines()[-1:]}")
 
@@ -134,7 +140,13 @@ def main():
     parser.add_argument("--sysid", action="store_true", help="also the identification bar (~1 min a seed)")
     parser.add_argument("--frontier", action="store_true",
                         help="also energy ratio, glide fraction, cruise flap Hz and level 3 m/s (~1 min a seed)")
+    parser.add_argument("--model", type=Path,
+                        help="the robot (MJCF) the runs were trained on; default the shipped models/flapper.xml")
     args = parser.parse_args()
+    if args.model is not None:
+        if not args.model.is_file():
+            sys.exit(f"seed-table: --model '{args.model}' is not a file")
+        MODEL_ARGS.extend(["--model", str(args.model)])
     if args.out.exists():
         sys.exit(f"seed-table: '{args.out}' exists; choose another --out (nothing was overwritten)")
     for run in args.runs:
@@ -144,6 +156,7 @@ def main():
     for run in args.runs:
         summary = json.load(open(run / "summary.json"))
         row = {
+            **({"robot": args.model.name} if args.model is not None else {}),
             "seed": summary["seed"],
             "total_env_steps": summary["total_env_steps"],
             "total_wall_time_s": round(summary["total_wall_time_s"], 1),
