@@ -491,8 +491,10 @@ fn choose<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<(&'a V
 }
 
 /// What a stage that will train no more hands over: [`choose`]'s checkpoint, else, where the gate's
-/// flight-mode bars are sought, the most efficient checkpoint that meets every tracking bar. With whether
-/// the identification was met (`None`: not asked) and whether the flight modes were (`None`: met or not asked).
+/// flight-mode bars are sought, the most efficient checkpoint that meets every tracking bar from the gate's
+/// `min_iterations` on, else before them (a fine-tuning stage whose budget was cut short still hands over
+/// a controller that tracks, if it ever had one). With whether the identification was met (`None`: not
+/// asked) and whether the flight modes were (`None`: met or not asked).
 fn choose_at_the_end<'a>(
     stage: &'a StageConfig,
     selection: &'a Selection,
@@ -501,7 +503,10 @@ fn choose_at_the_end<'a>(
         return Some((best, identified, None));
     }
     let identified = stage.gate.identification_fit_percent.map(|_| false);
-    selection.most_efficient_tracking(&stage.gate).map(|best| (best, identified, Some(false)))
+    selection
+        .most_efficient_tracking(&stage.gate)
+        .or_else(|| selection.most_efficient_tracking_from(&stage.gate, 0))
+        .map(|best| (best, identified, Some(false)))
 }
 
 /// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the

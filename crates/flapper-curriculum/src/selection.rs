@@ -186,6 +186,13 @@ impl Selection {
     /// flight-mode bars, then flies with the least energy per metre (the best score, then the earliest, of
     /// equals). `None` where the gate asks no flight mode, requires them, or no checkpoint tracks.
     pub fn most_efficient_tracking<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        self.most_efficient_tracking_from(gate, gate.min_iterations)
+    }
+
+    /// [`Self::most_efficient_tracking`] among the checkpoints from `iteration` on: from 0, also those
+    /// before the gate's `min_iterations`, which a stage hands over only when none after tracks (a stage
+    /// 5 that its budget cut short at 400 iterations tracked every bar at 150 and at no validation after).
+    pub fn most_efficient_tracking_from<'a>(&'a self, gate: &'a Gate, iteration: usize) -> Option<&'a Validated> {
         if !gate_asks_flight_modes(gate) || gate.flight_modes_required {
             return None;
         }
@@ -197,7 +204,7 @@ impl Selection {
         let tracking: Vec<(&Validated, usize, f64)> = self
             .rows
             .iter()
-            .filter(|r| r.iteration >= gate.min_iterations && r.score.meets(gate))
+            .filter(|r| r.iteration >= iteration && r.score.meets(gate))
             .map(|r| (r, flight_mode_bars_met(gate, r.modes.as_ref()), energy(r)))
             .collect();
         let most = tracking.iter().map(|&(_, met, _)| met).max()?;
@@ -465,6 +472,9 @@ mod tests {
         };
         assert!(selection.best_meeting(&gate).is_none(), "no checkpoint meets 1.2 x");
         assert_eq!(selection.most_efficient_tracking(&gate).map(|r| r.iteration), Some(500), "flap met, least energy");
+        assert_eq!(selection.most_efficient_tracking_from(&gate, 0).map(|r| r.iteration), Some(100), "earlier too");
+        let late = Gate { min_iterations: 700, ..gate.clone() };
+        assert!(selection.most_efficient_tracking(&late).is_none(), "nothing tracks from 700 on");
         let required = Gate { flight_modes_required: true, ..gate.clone() };
         assert!(selection.most_efficient_tracking(&required).is_none(), "required: no fallback");
         assert!(selection.most_efficient_tracking(&Gate::completing(90.0)).is_none(), "no flight-mode bar asked");
