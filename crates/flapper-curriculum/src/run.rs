@@ -776,4 +776,43 @@ mod tests {
         assert_eq!(restart_due(&[extension(3200, Some(0.4)), extension(3300, None)], 3200), None, "an earlier one");
         assert_eq!(restart_due(&[], 3200), None);
     }
+
+    /// A checkpoint that flew the one validation reference `completed` of 10 at `energy_ratio`, 5 Hz.
+    fn judged(iteration: usize, completed: usize, energy_ratio: f64) -> Validated {
+        let references =
+            vec![crate::validation::ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: 0.2 }];
+        Validated {
+            iteration,
+            env_steps: 0,
+            validation_s: 0.0,
+            score: crate::validation::Score { completed_percent: 10.0 * completed as f64, mean_rms_m: 0.2, references },
+            modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz: 5.0 }),
+            identification_fit_percent: None,
+        }
+    }
+
+    #[test]
+    fn a_stage_seeking_flight_modes_hands_over_a_tracking_checkpoint_before_its_min_iterations_only_as_a_last_resort() {
+        // The shipped efficient-flight stage's gate (1.2 x, 4-6 Hz sought from iteration 300 on), tracking
+        // asked of one reference: 95% of 10 episodes.
+        let shipped =
+            CurriculumConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/curriculum.toml"))
+                .unwrap();
+        let mut stage = shipped.stages[4].clone();
+        stage.gate = Gate { identification_fit_percent: None, ..stage.gate.clone() };
+        stage.gate.reference_max_rms_m.clear();
+        let pick = |rows: Vec<Validated>| {
+            let selection = Selection { rows, columns: Default::default() };
+            choose_at_the_end(&stage, &selection).map(|(best, identified, modes)| (best.iteration, identified, modes))
+        };
+        // Seed 3's stage 5 cut to 400 iterations: tracking at 150 (2.17 x), at none from 300 on.
+        let cut_short = vec![judged(150, 10, 2.17), judged(300, 9, 2.16), judged(350, 9, 2.15), judged(400, 9, 2.2)];
+        assert_eq!(pick(cut_short), Some((150, None, Some(false))));
+        // A tracking checkpoint from 300 on is preferred to a more efficient one before.
+        assert_eq!(pick(vec![judged(150, 10, 1.3), judged(300, 10, 1.9)]), Some((300, None, Some(false))));
+        // One that meets the energy bar from 300 on meets the gate.
+        assert_eq!(pick(vec![judged(150, 10, 1.1), judged(300, 10, 1.15)]), Some((300, None, None)));
+        // Nothing tracks: nothing handed over, the run stops.
+        assert_eq!(pick(vec![judged(150, 9, 1.1), judged(300, 8, 1.15)]), None);
+    }
 }
