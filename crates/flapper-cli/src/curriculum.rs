@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
+use flapper_curriculum::summary::Summary;
 use flapper_curriculum::{CurriculumConfig, CurriculumRequest, Progress, run_curriculum};
 
 use crate::flag_values::seed;
@@ -45,9 +46,17 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
         CurriculumRequest { dir: &args.out, config, until_stage: args.until_stage.map(|k| k as usize), command };
     let outcomes = run_curriculum(robot, request, &mut report_progress)
         .with_context(|| format!("curriculum in '{}'", args.out.display()))?;
-    let steps: u64 = outcomes.iter().map(|o| o.env_steps).sum();
-    let seconds: f64 = outcomes.iter().map(|o| o.wall_time_s).sum();
-    println!("done: {} stages, {:.2} M environment steps, {:.0} s", outcomes.len(), steps as f64 / 1e6, seconds);
+    let summary = Summary::read(&args.out)?;
+    println!(
+        "done: {} stages handed over a controller{}, {:.2} M environment steps, {:.0} s",
+        outcomes.len(),
+        summary
+            .optional_stage_missed
+            .as_ref()
+            .map_or(String::new(), |m| format!(" (stage {} missed its gate)", m.stage)),
+        summary.total_env_steps as f64 / 1e6,
+        summary.total_wall_time_s
+    );
     for file in ["policy.safetensors", "summary.json", "curriculum.svg"] {
         println!("wrote {}", args.out.join(file).display());
     }
@@ -132,6 +141,10 @@ fn report_progress(event: Progress) {
                     "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",
                 _ => "",
             }
+        ),
+        Progress::OptionalStageMissed { missed, kept } => println!(
+            "{missed}. The stage is optional: the run ends with stage {}'s controller (iteration {}, {:.1}% completed, RMS {:.3} m), and summary.json records the missed stage (optional_stage_missed)",
+            kept.stage, kept.selected_iteration, kept.validation_score, kept.validation_rms_m
         ),
     }
 }

@@ -75,6 +75,12 @@ pub struct StageConfig {
     /// standard deviation, for as many iterations as an extension gets (within the run's budget).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart_noise_std: Option<f32>,
+    /// An optional last stage: one that refines a controller the stages before it already made (the
+    /// efficient flight of stage 5). Missing its gate does not stop the run: the run ends with the
+    /// previous stage's controller, and `summary.json` says which gate was missed and why
+    /// (`optional_stage_missed`). Only the last stage, and not the first, may be optional.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub optional: bool,
     /// Judge and hand over, at each validation, the mean of the weights of the last this many
     /// checkpoints of the stage (the one just saved and those before it; fewer early in the stage)
     /// instead of the checkpoint alone: stochastic weight averaging, for a fine-tuning stage whose
@@ -133,9 +139,10 @@ pub struct RandomizedValidation {
 }
 
 impl StageConfig {
-    /// The stage less `restart_noise_std`, which says only what it does once its budget is spent.
-    pub fn without_restart(&self) -> StageConfig {
-        StageConfig { restart_noise_std: None, ..self.clone() }
+    /// The stage less what it does once its budget is spent (`restart_noise_std`, `optional`): what it
+    /// trains and how it is judged.
+    pub fn as_trained(&self) -> StageConfig {
+        StageConfig { restart_noise_std: None, optional: false, ..self.clone() }
     }
 
     /// The fewest iterations the stage can hand over after: one validation interval, or its gate's
@@ -378,6 +385,13 @@ impl CurriculumConfig {
                     "average_checkpoints must be in [1, {MAX_AVERAGED_CHECKPOINTS}], got {count}"
                 )));
             }
+            if stage.optional && (number == 1 || number < config.stages.len()) {
+                return Err(bad(format!(
+                    "optional = true is allowed on the last stage only, after at least one other (this is stage \
+                     {number} of {}): a missed optional stage ends the run with the previous stage's controller",
+                    config.stages.len()
+                )));
+            }
             for (key, value) in
                 [("start_noise_std", stage.start_noise_std), ("restart_noise_std", stage.restart_noise_std)]
             {
@@ -606,6 +620,8 @@ task = { stage = 2 }
         );
         let restarts: Vec<Option<f32>> = c.stages.iter().map(|s| s.restart_noise_std).collect();
         assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None], "stalled, stages 3 and 4 restart");
+        let optional: Vec<bool> = c.stages.iter().map(|s| s.optional).collect();
+        assert_eq!(optional, [false, false, false, false, true], "a missed stage 5 leaves stage 4's controller");
         let efficient = c.stage_train_config(5).unwrap();
         assert!(efficient.ppo.smoothness_coef > 0.0 && efficient.task.reference.glide_probability > 0.0);
         let gate = &c.stages[4].gate;

@@ -2,12 +2,12 @@
 //!
 //! Folder: `curriculum.toml` (the curriculum as run), `stageK/` (an ordinary training run, plus its
 //! `selection.csv` and, once the stage is done, `selected.json`), `summary.json`, `curriculum.svg` and,
-//! at the end, `policy.safetensors` (the last stage's selected checkpoint as a policy file).
+//! at the end, `policy.safetensors` (the last handed-over checkpoint as a policy file).
 //!
 //! A stage trains until its gate is met at a validation (from `min_iterations` on) or its budget is
 //! spent; a stage whose budget ran out while its validations still improve is given more iterations
 //! (`stageK/extensions.json`; at most [`MAX_EXTENSIONS`], within the run's budget after the later stages'),
-//! else it stops the run. It hands over its best validated checkpoint (never simply the last), and the next stage starts
+//! else it stops the run (an optional last stage instead ends it with the stage before it). It hands over its best validated checkpoint (never simply the last), and the next stage starts
 //! from that checkpoint with its own action noise. Running again on the same folder picks up where it
 //! stopped: finished stages are read back, an interrupted one resumes from its last checkpoint (exactly,
 //! as `flapper train --resume` does), a checkpoint saved but not yet judged is judged first.
@@ -71,6 +71,12 @@ pub enum Progress<'a> {
     StageDone {
         outcome: &'a StageOutcome,
     },
+    /// The optional last stage missed its gate (`missed`, the message a stopped run would end with): the
+    /// run ends with the controller `kept` handed over.
+    OptionalStageMissed {
+        missed: &'a CurriculumError,
+        kept: &'a StageOutcome,
+    },
 }
 
 /// How many validations make a stage's recent trend ([`Selection::still_improving`]).
@@ -95,18 +101,23 @@ pub fn run_curriculum(
         let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
         let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
         let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
-        if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
+        if let Err(missed @ CurriculumError::GateMissed { stopped, .. }) = &result {
+            let summary = Summary::new(&config, &request.command, &outcomes);
+            if let (true, Some(kept)) = (config.stages[number - 1].optional, outcomes.last()) {
+                // An optional last stage refines what the stages before it made: the run ends with theirs.
+                summary.optional_missed(stopped.as_ref().clone()).write(&dir.join("summary.json"))?;
+                write_figure(dir, &config, number)?;
+                progress(Progress::OptionalStageMissed { missed, kept });
+                break;
+            }
             // The summary of a stopped run counts the stage that stopped it.
-            let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
-            summary.write(&dir.join("summary.json"))?;
+            summary.stopped_at(stopped.as_ref().clone()).write(&dir.join("summary.json"))?;
         }
         let outcome = result?;
         progress(Progress::StageDone { outcome: &outcome });
         outcomes.push(outcome);
         Summary::new(&config, &request.command, &outcomes).write(&dir.join("summary.json"))?;
-        let stage_dirs: Vec<PathBuf> = (1..=number).map(|k| stage_dir(dir, k)).collect();
-        write_curriculum_figure(&stage_dirs, &config, &dir.join("curriculum.svg"))
-            .map_err(|message| CurriculumError::File { path: dir.join("curriculum.svg"), message })?;
+        write_figure(dir, &config, number)?;
     }
     let policy = dir.join("policy.safetensors");
     if let Some(outcome) = outcomes.last() {
@@ -171,13 +182,20 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
     Ok(config.clone())
 }
 
+/// `curriculum.svg` of stages 1 to `last`.
+fn write_figure(dir: &Path, config: &CurriculumConfig, last: usize) -> Result<(), CurriculumError> {
+    let stage_dirs: Vec<PathBuf> = (1..=last).map(|k| stage_dir(dir, k)).collect();
+    write_curriculum_figure(&stage_dirs, config, &dir.join("curriculum.svg"))
+        .map_err(|message| CurriculumError::File { path: dir.join("curriculum.svg"), message })
+}
+
 /// Whether stage `number` trains and is judged the same under both curricula (its own entry and the
-/// training config the shared tables make of it). `restart_noise_std` may differ: it says only what a
-/// stage does once its budget is spent, so a stage that stopped stalled can be given a restart and
-/// continued in its folder.
+/// training config the shared tables make of it). `restart_noise_std` and `optional` may differ: they say
+/// only what a stage does once its budget is spent, so a stage that stopped can be given a restart (or
+/// made optional) and continued in its folder.
 fn same_stage(a: &CurriculumConfig, b: &CurriculumConfig, number: usize) -> bool {
     let Some(stage) = b.stages.get(number - 1) else { return false };
-    stage.without_restart() == a.stages[number - 1].without_restart()
+    stage.as_trained() == a.stages[number - 1].as_trained()
         && match (a.stage_train_config(number), b.stage_train_config(number)) {
             (Ok(x), Ok(y)) => x == y,
             _ => false,

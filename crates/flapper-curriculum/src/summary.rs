@@ -1,6 +1,8 @@
 //! `summary.json`: the seed, the command, and per stage its iterations, environment steps, wall time,
 //! the checkpoint it handed over and that checkpoint's validation score; for a run stopped by a missed
-//! gate, that stage's spending and best score (`stopped`); the totals, the stopped stage included.
+//! gate, that stage's spending and best score (`stopped`); for a run whose optional last stage missed its
+//! gate, the same for that stage (`optional_stage_missed`), the run ending with the stage before it; the
+//! totals, the stopped or missed stage included.
 
 use std::path::Path;
 
@@ -18,6 +20,10 @@ pub struct Summary {
     /// The stage whose missed gate stopped the run; absent in a run that did not stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<StoppedStage>,
+    /// The optional last stage whose gate was missed ([`crate::config::StageConfig::optional`]): the run
+    /// ended with the controller of the last of `stages`, not this one's. Absent where none was missed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optional_stage_missed: Option<StoppedStage>,
     pub total_env_steps: u64,
     /// Training and validation of every stage (not the time a run stood interrupted).
     pub total_wall_time_s: f64,
@@ -30,6 +36,7 @@ impl Summary {
             command: command.to_owned(),
             stages: stages.to_vec(),
             stopped: None,
+            optional_stage_missed: None,
             total_env_steps: stages.iter().map(|s| s.env_steps).sum(),
             total_wall_time_s: stages.iter().map(|s| s.wall_time_s).sum(),
         }
@@ -40,6 +47,15 @@ impl Summary {
         self.total_env_steps += stopped.env_steps;
         self.total_wall_time_s += stopped.wall_time_s;
         self.stopped = Some(stopped);
+        self
+    }
+
+    /// The summary of a run whose optional last stage `missed` its gate: the run ends with the stages
+    /// before it, and the missed stage's steps and time join the totals.
+    pub fn optional_missed(mut self, missed: StoppedStage) -> Self {
+        self.total_env_steps += missed.env_steps;
+        self.total_wall_time_s += missed.wall_time_s;
+        self.optional_stage_missed = Some(missed);
         self
     }
 

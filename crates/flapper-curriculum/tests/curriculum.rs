@@ -175,6 +175,45 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
 }
 
 #[test]
+fn a_missed_optional_last_stage_ends_the_run_with_the_previous_stages_controller() {
+    let dir = scratch("optional");
+    let missed = "gate = { completed_percent = 100, min_iterations = 4 }";
+    let text = TINY.replacen("start_noise_std = 0.8", "start_noise_std = 0.8\noptional = true", 1).replacen(
+        "gate = { completed_percent = 0, min_iterations = 4 }",
+        missed,
+        1,
+    );
+    assert_eq!(run(&dir, &text, None), Ok(1), "one stage handed over a controller, and the run succeeds");
+    let recorded = summary(&dir);
+    assert_eq!(recorded["stages"].as_array().unwrap().len(), 1, "{recorded}");
+    assert!(recorded.get("stopped").is_none(), "{recorded}");
+    let missed_stage = &recorded["optional_stage_missed"];
+    assert_eq!(missed_stage["stage"], 2, "{recorded}");
+    assert!(missed_stage["gate"].as_str().unwrap().contains("at least 100%"), "{recorded}");
+    // Its steps are in the totals; the final policy is stage 1's handed-over checkpoint.
+    let steps = |v: &serde_json::Value| v["env_steps"].as_u64().unwrap();
+    assert_eq!(recorded["total_env_steps"].as_u64().unwrap(), steps(&recorded["stages"][0]) + steps(missed_stage));
+    let policy = |path: &Path| flapper_ppo::checkpoint::load(path).unwrap().policy;
+    let handed_over = dir.join(recorded["stages"][0]["checkpoint"].as_str().unwrap());
+    assert!(policy(&dir.join("policy.safetensors")) == policy(&handed_over), "the final policy is stage 1's");
+    assert_eq!(run(&dir, &text, None), Ok(1), "running again ends the same way");
+    assert_eq!(
+        summary(&dir)["optional_stage_missed"]["iterations"],
+        missed_stage["iterations"],
+        "without training more"
+    );
+    // The same stage, not optional, stops the run; the key alone changes nothing it trained.
+    let e = run(&dir, &text.replacen("\noptional = true", "", 1), None).unwrap_err();
+    assert!(e.contains("stage 2 ('climb and dive') missed its gate"), "{e}");
+    std::fs::remove_dir_all(dir).unwrap();
+
+    // Only the last stage, after another, may be optional.
+    let first = TINY.replacen("validate_every = 2", "validate_every = 2\noptional = true", 1);
+    let e = CurriculumConfig::from_toml(&first, "tiny.toml").unwrap_err().to_string();
+    assert!(e.contains("stage 1 ('cruise')") && e.contains("optional = true is allowed on the last stage only"), "{e}");
+}
+
+#[test]
 fn a_stage_still_improving_when_its_budget_runs_out_is_extended_and_the_summary_says_why() {
     let dir = scratch("extended");
     let text = TINY
