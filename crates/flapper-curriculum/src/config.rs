@@ -76,8 +76,8 @@ pub struct StageConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart_noise_std: Option<f32>,
     /// An optional last stage: one that refines a controller the stages before it already made (the
-    /// efficient flight of stage 5). Missing its gate does not stop the run: the run ends with the
-    /// previous stage's controller, and `summary.json` says which gate was missed and why
+    /// efficient flight of stage 5). Missing its gate (or too little budget left to start it) does not
+    /// stop the run: the run ends with the previous stage's controller, and `summary.json` says which gate was missed and why
     /// (`optional_stage_missed`). Only the last stage, and not the first, may be optional.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub optional: bool,

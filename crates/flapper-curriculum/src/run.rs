@@ -71,8 +71,8 @@ pub enum Progress<'a> {
     StageDone {
         outcome: &'a StageOutcome,
     },
-    /// The optional last stage missed its gate (`missed`, the message a stopped run would end with): the
-    /// run ends with the controller `kept` handed over.
+    /// The optional last stage missed its gate or could not start for the budget (`missed`, the error a
+    /// stopped run would end with): the run ends with the controller `kept` handed over.
     OptionalStageMissed {
         missed: &'a CurriculumError,
         kept: &'a StageOutcome,
@@ -101,17 +101,29 @@ pub fn run_curriculum(
         let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
         let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
         let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
-        if let Err(missed @ CurriculumError::GateMissed { stopped, .. }) = &result {
-            let summary = Summary::new(&config, &request.command, &outcomes);
-            if let (true, Some(kept)) = (config.stages[number - 1].optional, outcomes.last()) {
-                // An optional last stage refines what the stages before it made: the run ends with theirs.
-                summary.optional_missed(stopped.as_ref().clone()).write(&dir.join("summary.json"))?;
-                write_figure(dir, &config, number)?;
+        let stage = &config.stages[number - 1];
+        if let (Err(missed), true, Some(kept)) = (&result, stage.optional, outcomes.last()) {
+            // An optional last stage refines what the stages before it made: missing its gate, or left too
+            // little budget to start, it ends the run with theirs.
+            let recorded = match missed {
+                CurriculumError::GateMissed { stopped, .. } => Some(stopped.as_ref().clone()),
+                CurriculumError::BudgetSpent { .. } => Some(never_started(stage, number, missed)),
+                _ => None,
+            };
+            if let Some(recorded) = recorded {
+                let summary = Summary::new(&config, &request.command, &outcomes).optional_missed(recorded);
+                summary.write(&dir.join("summary.json"))?;
+                if stage_dir(dir, number).join("training.csv").exists() {
+                    write_figure(dir, &config, number)?;
+                }
                 progress(Progress::OptionalStageMissed { missed, kept });
                 break;
             }
+        }
+        if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
             // The summary of a stopped run counts the stage that stopped it.
-            summary.stopped_at(stopped.as_ref().clone()).write(&dir.join("summary.json"))?;
+            let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
+            summary.write(&dir.join("summary.json"))?;
         }
         let outcome = result?;
         progress(Progress::StageDone { outcome: &outcome });
@@ -180,6 +192,24 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
     }
     checkpoint::write_atomically(&saved_path, config.to_toml().as_bytes())?;
     Ok(config.clone())
+}
+
+/// The record of a stage the run's budget left too little to start (`why`, the error saying so).
+fn never_started(stage: &StageConfig, number: usize, why: &CurriculumError) -> StoppedStage {
+    StoppedStage {
+        stage: number,
+        name: stage.name.clone(),
+        gate: describe_gate(&stage.gate),
+        iterations: 0,
+        env_steps: 0,
+        wall_time_s: 0.0,
+        best_iteration: None,
+        best_validation_score: None,
+        best_validation_rms_m: None,
+        cpu: None,
+        extensions: Vec::new(),
+        stopped_because: Some(why.to_string()),
+    }
 }
 
 /// `curriculum.svg` of stages 1 to `last`.

@@ -20,8 +20,9 @@ pub struct Summary {
     /// The stage whose missed gate stopped the run; absent in a run that did not stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<StoppedStage>,
-    /// The optional last stage whose gate was missed ([`crate::config::StageConfig::optional`]): the run
-    /// ended with the controller of the last of `stages`, not this one's. Absent where none was missed.
+    /// The optional last stage whose gate was missed, or which the budget left too little to start
+    /// (`iterations` 0; [`crate::config::StageConfig::optional`]): the run ended with the controller of the
+    /// last of `stages`, not this one's. Absent where none was missed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub optional_stage_missed: Option<StoppedStage>,
     pub total_env_steps: u64,

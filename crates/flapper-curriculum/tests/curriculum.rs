@@ -563,6 +563,15 @@ fn the_runs_step_budget_shortens_a_stage_and_stops_one_it_leaves_too_little() {
     assert!(summary["total_env_steps"].as_u64().unwrap() <= 64, "{summary}");
     assert!(!stage_dir(&dir, 2).exists(), "stage 2 was not started");
     assert_eq!(run(&dir, &text, None).unwrap_err(), e, "running again reports the same");
+    // An optional stage 2 left too little to start ends the run with stage 1's controller, and says why.
+    let optional = text.replacen("start_noise_std = 0.8", "start_noise_std = 0.8\noptional = true", 1);
+    assert_eq!(run(&dir, &optional, None), Ok(1));
+    let recorded: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let missed = &recorded["optional_stage_missed"];
+    assert_eq!((missed["stage"].as_u64(), missed["iterations"].as_u64()), (Some(2), Some(0)), "{missed}");
+    assert!(missed["stopped_because"].as_str().unwrap().contains("cannot start"), "{missed}");
+    assert!(dir.join("policy.safetensors").exists() && !stage_dir(&dir, 2).exists());
     // A budget the stages fit in changes nothing: the same files as a run without one.
     let roomy = scratch("budget-roomy");
     let whole = scratch("budget-none");
