@@ -508,6 +508,12 @@ impl CurriculumConfig {
     }
 }
 
+/// A curriculum of the repository's `configs/` (`file` relative to it), for tests.
+#[cfg(test)]
+pub(crate) fn shipped(file: &str) -> CurriculumConfig {
+    CurriculumConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(file)).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -578,10 +584,6 @@ task = { stage = 2 }
         // The last stage keeps nothing back: 1 iteration of 16 steps left after 64 spent and 2 trained.
         c.max_env_steps = Some(64 + 2 * 16 + 16);
         assert_eq!(c.extension_iterations(2, 64, 2).unwrap(), 1);
-    }
-
-    fn shipped(file: &str) -> CurriculumConfig {
-        CurriculumConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(file)).unwrap()
     }
 
     /// The run's budget is set, within the paper's 30 M steps, and leaves every stage room to start after

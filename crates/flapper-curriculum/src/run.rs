@@ -827,26 +827,15 @@ mod tests {
 
     /// A checkpoint that flew the one validation reference `completed` of 10 at `energy_ratio`, 5 Hz.
     fn judged(iteration: usize, completed: usize, energy_ratio: f64) -> Validated {
-        let references =
-            vec![crate::validation::ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: 0.2 }];
-        Validated {
-            iteration,
-            env_steps: 0,
-            validation_s: 0.0,
-            score: crate::validation::Score { completed_percent: 10.0 * completed as f64, mean_rms_m: 0.2, references },
-            modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz: 5.0 }),
-            identification_fit_percent: None,
-        }
+        let modes = Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz: 5.0 });
+        Validated { modes, ..Validated::of_cruise(iteration, completed, 0.2) }
     }
 
     #[test]
     fn a_stage_seeking_flight_modes_hands_over_a_tracking_checkpoint_before_its_min_iterations_only_as_a_last_resort() {
         // The shipped efficient-flight stage's gate (1.2 x, 4-6 Hz sought from iteration 300 on), tracking
         // asked of one reference: 95% of 10 episodes.
-        let shipped =
-            CurriculumConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/curriculum.toml"))
-                .unwrap();
-        let mut stage = shipped.stages[4].clone();
+        let mut stage = crate::config::shipped("curriculum.toml").stages[4].clone();
         stage.gate = Gate { identification_fit_percent: None, ..stage.gate.clone() };
         stage.gate.reference_max_rms_m.clear();
         let pick = |rows: Vec<Validated>| {

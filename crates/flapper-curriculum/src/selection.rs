@@ -431,10 +431,10 @@ pub fn stage_validation_time_s(selection: &Selection) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn row(iteration: usize, completed: usize, rms: f64) -> Validated {
+impl Validated {
+    /// A checkpoint that flew one validation reference, cruise, `completed` of 10 with a mean RMS error of
+    /// `rms` (tests).
+    pub(crate) fn of_cruise(iteration: usize, completed: usize, rms: f64) -> Self {
         let references = vec![ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms }];
         let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
         Validated {
@@ -446,12 +446,19 @@ mod tests {
             identification_fit_percent: None,
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use Validated as V;
 
     #[test]
     fn sought_flight_modes_fall_back_to_the_most_efficient_tracking_checkpoint() {
         let with = |iteration, completed, energy_ratio: f64, cruise_flap_hz| Validated {
             modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz }),
-            ..row(iteration, completed, 0.2)
+            ..V::of_cruise(iteration, completed, 0.2)
         };
         let selection = Selection {
             rows: vec![
@@ -483,7 +490,7 @@ mod tests {
     #[test]
     fn a_stage_is_still_improving_when_its_recent_best_beats_its_earlier_best() {
         let rows = |scores: &[(usize, f64)]| Selection {
-            rows: scores.iter().enumerate().map(|(k, &(c, rms))| row(100 * (k + 1), c, rms)).collect(),
+            rows: scores.iter().enumerate().map(|(k, &(c, rms))| V::of_cruise(100 * (k + 1), c, rms)).collect(),
             columns: GateColumns::default(),
         };
         // More completed in the last 2 than ever before.
@@ -504,7 +511,10 @@ mod tests {
     fn a_stages_wall_time_counts_each_validation_once() {
         // Validations at 10 and 20 ran inside training (its clock reads 100 s at iteration 20); the one at
         // 20 ran after that row was logged, so it alone is added.
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.4)], columns: GateColumns::default() };
+        let selection = Selection {
+            rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.4)],
+            columns: GateColumns::default(),
+        };
         assert_eq!(stage_wall_time_s(&selection, 100.0, 20), 101.5);
         assert_eq!(stage_wall_time_s(&selection, 100.0, 21), 100.0, "a stage that trained past its last validation");
         assert_eq!(stage_validation_time_s(&selection), 1.5 * selection.rows.len() as f64);
@@ -513,7 +523,12 @@ mod tests {
     #[test]
     fn the_best_checkpoint_is_chosen_by_completion_then_error_never_simply_the_last() {
         let selection = Selection {
-            rows: vec![row(10, 8, 0.5), row(20, 10, 0.4), row(30, 10, 0.3), row(40, 9, 0.1)],
+            rows: vec![
+                V::of_cruise(10, 8, 0.5),
+                V::of_cruise(20, 10, 0.4),
+                V::of_cruise(30, 10, 0.3),
+                V::of_cruise(40, 9, 0.1),
+            ],
             columns: GateColumns::default(),
         };
         assert_eq!(selection.best().unwrap().iteration, 30);
@@ -531,7 +546,10 @@ mod tests {
         assert_eq!(with_fits.best().unwrap().iteration, 30, "the best of all ignores the identification");
         assert_eq!(with_fits.best_flying(&identified).unwrap().iteration, 30, "flying bars only");
         assert!(with_fits.best_flying(&later).is_none(), "before min_iterations nothing flies the gate");
-        let ties = Selection { rows: vec![row(10, 10, 0.3), row(20, 10, 0.3)], columns: GateColumns::default() };
+        let ties = Selection {
+            rows: vec![V::of_cruise(10, 10, 0.3), V::of_cruise(20, 10, 0.3)],
+            columns: GateColumns::default(),
+        };
         assert_eq!(ties.best().unwrap().iteration, 10, "the earliest of equal checkpoints");
     }
 
@@ -539,7 +557,7 @@ mod tests {
     fn a_glide_bar_is_a_flight_bar_that_a_checkpoint_not_gliding_or_not_measured_misses() {
         let gate = Gate { glide_fraction: Some(0.5), ..Gate::completing(100.0) };
         let mut selection = Selection {
-            rows: vec![row(10, 10, 0.2), row(20, 10, 0.3), row(30, 10, 0.4)],
+            rows: vec![V::of_cruise(10, 10, 0.2), V::of_cruise(20, 10, 0.3), V::of_cruise(30, 10, 0.4)],
             columns: GateColumns::of(&gate),
         };
         assert!(!selection.gate_met(&gate) && selection.best_flying(&gate).is_none(), "nothing measured");
@@ -565,7 +583,7 @@ mod tests {
         let path = dir.join("selection.csv");
         let names = vec!["cruise".to_owned()];
         let none = GateColumns::default();
-        let selection = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], columns: none };
+        let selection = Selection { rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)], columns: none };
         selection.write(&path, &names).unwrap();
         let back = Selection::read(&path, &names, none).unwrap();
         assert_eq!(back.rows, selection.rows);
@@ -576,7 +594,8 @@ mod tests {
         assert!(e.contains("identification_x_fit_percent"), "a table without the identification columns: {e}");
         let e = Selection::read(&path, &names, GateColumns { modes: true, identification: false }).unwrap_err();
         assert!(e.to_string().contains("glide_fraction"), "a table without the flight-mode columns: {e}");
-        let mut identified = Selection { rows: vec![row(10, 8, 0.5), row(20, 10, 0.25)], columns: identification };
+        let mut identified =
+            Selection { rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)], columns: identification };
         identified.rows[1].identification_fit_percent = Some([81.25, 79.5, 90.0]);
         identified.write(&path, &names).unwrap();
         let back = Selection::read(&path, &names, identification).unwrap();
