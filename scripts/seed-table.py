@@ -42,15 +42,20 @@ ROBUSTNESS_BARS = {"lateral_table3": 90, "lateral_fluid_all_0.3": 95, "longitudi
 SYSID_BAR_PERCENT = 80.0
 
 
-# `--model FILE` for every flight when the runs trained another robot than models/flapper.xml.
-MODEL_ARGS = []
+class Flapper:
+    """Runs the flapper binary ($FLAPPER, else target/release/flapper) on one robot: `model`, the MJCF the
+    runs were trained on, or None for the shipped models/flapper.xml."""
 
+    def __init__(self, model):
+        default = Path(__file__).resolve().parent.parent / "target/release/flapper"
+        self.binary = os.environ.get("FLAPPER", str(default))
+        self.model_args = [] if model is None else ["--model", str(model)]
 
-def flapper(args, scratch):
-    binary = os.environ.get("FLAPPER", str(Path(__file__).resolve().parent.parent / "target/release/flapper"))
-    done = subprocess.run([binary, *args, *MODEL_ARGS, "--out", str(scratch)], capture_output=True, text=True)
-    if done.returncode != 0:
-        sys.exit(f"seed-table: flapper {' '.join(args)} failed: {done.stderr.strip().splitlines()[-1:]}")
+    def __call__(self, args, scratch):
+        done = subprocess.run([self.binary, *args, *self.model_args, "--out", str(scratch)],
+                              capture_output=True, text=True)
+        if done.returncode != 0:
+            sys.exit(f"seed-table: flapper {' '.join(args)} failed: {done.stderr.strip().splitlines()[-1:]}")
 
 
 def spent_in_stage(stage_dir):
@@ -70,7 +75,7 @@ def spent_in_stage(stage_dir):
     return int(rows[-1]["env_steps"]), float(rows[-1]["wall_time_s"]) + sum(float(r["validation_s"]) for r in after)
 
 
-def nominal(policy, scratch):
+def nominal(flapper, policy, scratch):
     row = {}
     for name in REFERENCES:
         out = scratch / f"eval-{name}"
@@ -86,7 +91,7 @@ def nominal(policy, scratch):
     return row
 
 
-def robustness(policy, scratch):
+def robustness(flapper, policy, scratch):
     row = {}
     for name in ["lateral", "longitudinal"]:
         out = scratch / f"robustness-{name}"
@@ -101,7 +106,7 @@ def robustness(policy, scratch):
     return row
 
 
-def sysid(policy, scratch):
+def sysid(flapper, policy, scratch):
     out = scratch / "sysid"
     flapper(["sysid", "--policy", str(policy)], out)
     result = json.load(open(out / "sysid.json"))
@@ -115,7 +120,7 @@ def sysid(policy, scratch):
 FRONTIER_COLUMNS = ["energy_ratio", "glide_fraction", "cruise_flap_hz", "level3_completed", "level3_rms_m"]
 
 
-def frontier(policy, scratch):
+def frontier(flapper, policy, scratch):
     out = scratch / "frontier"
     flapper(["frontier", "--policy", str(policy), "--episodes", "100", "--seed", "11"], out)
     measured = next(csv.DictReader(open(out / "frontier.csv")))
@@ -146,12 +151,12 @@ def main():
     if args.model is not None:
         if not args.model.is_file():
             sys.exit(f"seed-table: --model '{args.model}' is not a file")
-        MODEL_ARGS.extend(["--model", str(args.model)])
     if args.out.exists():
         sys.exit(f"seed-table: '{args.out}' exists; choose another --out (nothing was overwritten)")
     for run in args.runs:
         if not (run / "summary.json").is_file():
             sys.exit(f"seed-table: '{run}' has no summary.json: not a `flapper curriculum` run")
+    flapper = Flapper(args.model)
     rows = []
     for run in args.runs:
         summary = json.load(open(run / "summary.json"))
@@ -175,13 +180,13 @@ def main():
             continue
         with tempfile.TemporaryDirectory() as scratch:
             policy = run / "policy.safetensors"
-            row.update(nominal(policy, Path(scratch)))
+            row.update(nominal(flapper, policy, Path(scratch)))
             if args.robustness:
-                row.update(robustness(policy, Path(scratch)))
+                row.update(robustness(flapper, policy, Path(scratch)))
             if args.sysid:
-                row.update(sysid(policy, Path(scratch)))
+                row.update(sysid(flapper, policy, Path(scratch)))
             if args.frontier:
-                row.update(frontier(policy, Path(scratch)))
+                row.update(frontier(flapper, policy, Path(scratch)))
         print(", ".join(f"{k} {v}" for k, v in row.items()), flush=True)
         rows.append(row)
     columns = max((list(row.keys()) for row in rows), key=len)
