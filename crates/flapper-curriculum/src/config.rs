@@ -463,7 +463,8 @@ impl CurriculumConfig {
     /// The iterations stage `number` may add to its budget once it has trained `trained` of them (its
     /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
     /// run's `max_env_steps` leaves after the fewest iterations every later stage needs to hand over
-    /// ([`StageConfig::least_iterations`]); a multiple of `validate_every` (0: no room). Keeping back the
+    /// ([`StageConfig::least_iterations`]; an optional stage holds nothing back: a required stage meeting
+    /// its gate matters more than the refinement after it); a multiple of `validate_every` (0: no room). Keeping back the
     /// later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
     /// stages' caps add up to more than the run's budget by design, so a heavier robot's stage 2 still
     /// improving at its 400th iteration stopped the run with 27 M of the 30 M steps unspent.
@@ -481,7 +482,7 @@ impl CurriculumConfig {
         let mut room = stage.max_iterations / 2;
         if let Some(total) = self.max_env_steps {
             let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
-            for later in number + 1..=self.stages.len() {
+            for later in (number + 1..=self.stages.len()).filter(|&k| !self.stages[k - 1].optional) {
                 reserved += self.stages[later - 1].least_iterations() as u64 * per_iteration(later)?;
             }
             room = room.min((total.saturating_sub(reserved) / per_iteration(number)?) as usize);
@@ -657,15 +658,20 @@ task = { stage = 2 }
         check_budget(&slow, "curriculum-slow-flight.toml");
 
         // The shipped curriculum with a 42 M budget, and the budget a restart has: after seed 2's stages 1-2
-        // (227 iterations) and a stalled stage 3 (3200), 21.06 M steps, the shipped 30 M leave 800 iterations
-        // once stages 4-5 keep the 300 each needs; 42 M leave half the stage's budget, 1600. Seed 3's stage 4,
-        // stalled at 1000 after 3103 iterations of stages 1-3, gets 475 (stage 5 keeps 300).
+        // (227 iterations) and a stalled stage 3 (3200), 21.06 M steps, the shipped 30 M leave 1100 iterations
+        // once stage 4 keeps the 300 it needs (stage 5, optional, keeps nothing); 42 M leave half the stage's
+        // budget, 1600. Seed 3's stage 4, stalled at 1000 after 3103 iterations of stages 1-3, gets its half
+        // budget, 500 (475 while stage 5 kept 300).
         let restart = shipped("experiments/curriculum-restart-stalled.toml");
         assert!(restart.stages == five.stages && restart.max_env_steps == Some(42_000_000), "the budget alone differs");
         let seed2_before_stage3 = 227 * 6144;
-        assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 800);
+        assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1100);
         assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1600);
-        assert_eq!(five.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 475);
+        assert_eq!(five.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 500);
+        // Not optional, stage 5 would keep its 300 from stage 3's restart.
+        let mut required = five.clone();
+        required.stages[4].optional = false;
+        assert_eq!(required.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 800);
         // A stage 2 still improving at its 400th iteration (a heavier robot's, after 126 of stage 1) may
         // add half its budget: stages 3-5 keep 2000 + 300 + 300 iterations.
         assert_eq!(five.extension_iterations(2, 126 * 6144, 400).unwrap(), 200);
