@@ -113,17 +113,16 @@ pub fn run_curriculum(
             if let Some(recorded) = recorded {
                 let summary = Summary::new(&config, &request.command, &outcomes).optional_missed(recorded);
                 summary.write(&dir.join("summary.json"))?;
-                if stage_dir(dir, number).join("training.csv").exists() {
-                    write_figure(dir, &config, number)?;
-                }
+                write_figure(dir, &config, number)?;
                 progress(Progress::OptionalStageMissed { missed, kept });
                 break;
             }
         }
         if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
-            // The summary of a stopped run counts the stage that stopped it.
+            // The summary and the figure of a stopped run show the stage that stopped it.
             let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
             summary.write(&dir.join("summary.json"))?;
+            write_figure(dir, &config, number)?;
         }
         let outcome = result?;
         progress(Progress::StageDone { outcome: &outcome });
@@ -212,9 +211,11 @@ fn never_started(stage: &StageConfig, number: usize, why: &CurriculumError) -> S
     }
 }
 
-/// `curriculum.svg` of stages 1 to `last`.
+/// `curriculum.svg` of stages 1 to `last` (those that trained: a stage the budget left too little to start
+/// has no training log).
 fn write_figure(dir: &Path, config: &CurriculumConfig, last: usize) -> Result<(), CurriculumError> {
-    let stage_dirs: Vec<PathBuf> = (1..=last).map(|k| stage_dir(dir, k)).collect();
+    let stage_dirs: Vec<PathBuf> =
+        (1..=last).map(|k| stage_dir(dir, k)).take_while(|d| d.join("training.csv").exists()).collect();
     write_curriculum_figure(&stage_dirs, config, &dir.join("curriculum.svg"))
         .map_err(|message| CurriculumError::File { path: dir.join("curriculum.svg"), message })
 }

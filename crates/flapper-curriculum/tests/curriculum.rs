@@ -158,6 +158,7 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
     assert!(e.contains("stage 1 ('cruise') missed its gate"), "{e}");
     assert!(e.contains("at least 100%") && e.contains("best checkpoint") && e.contains("completed 0.0%"), "{e}");
     assert!(!stage_dir(&dir, 2).exists(), "the run stopped at the missed gate");
+    assert!(dir.join("curriculum.svg").exists(), "the figure shows the stage that stopped the run");
     // The summary counts the stage that stopped the run: its steps are in the totals.
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
