@@ -25,6 +25,11 @@ pub struct CurriculumArgs {
     /// Replaces the config's seed (stage k trains with seed * 100 + k).
     #[arg(long, value_parser = seed, allow_negative_numbers = true)]
     seed: Option<u64>,
+    /// Start the first stage from this policy (a policy.safetensors, or a checkpoint) instead of new
+    /// networks, with that stage's start_noise_std: fine-tunes a controller, for example the shipped one
+    /// on your robot with configs/experiments/curriculum-transfer.toml (stages 4 and 5 only).
+    #[arg(long, value_name = "POLICY")]
+    init_from: Option<PathBuf>,
     /// Stop after this stage (1-based); run again without it to go on.
     #[arg(long, value_name = "K", value_parser = 1..=100, allow_negative_numbers = true)]
     until_stage: Option<i64>,
@@ -42,8 +47,12 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
         config.seed = seed;
     }
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let request =
-        CurriculumRequest { dir: &args.out, config, until_stage: args.until_stage.map(|k| k as usize), command };
+    if let Some(policy) = &args.init_from {
+        flapper_ppo::checkpoint::load(policy)
+            .with_context(|| format!("--init-from '{}' is not a policy or checkpoint", policy.display()))?;
+    }
+    let until_stage = args.until_stage.map(|k| k as usize);
+    let request = CurriculumRequest { dir: &args.out, config, until_stage, command, init_from: args.init_from };
     let outcomes = run_curriculum(robot, request, &mut report_progress)
         .with_context(|| format!("curriculum in '{}'", args.out.display()))?;
     let summary = Summary::read(&args.out)?;

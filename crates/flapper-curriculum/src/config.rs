@@ -692,6 +692,12 @@ task = { stage = 2 }
         assert!(without.stages.iter().zip(&five.stages).enumerate().all(|(k, (a, b))| (k == 2) != (a == b)));
         assert_eq!(without.max_env_steps, five.max_env_steps);
         check_budget(&without, "curriculum-without-path-starts.toml");
+
+        // A controller fine-tuned on one's own robot: the shipped stages 4 and 5 alone, unchanged.
+        let transfer = shipped("experiments/curriculum-transfer.toml");
+        assert_eq!(transfer.stages, five.stages[3..], "stages 4 and 5 as shipped");
+        assert_eq!(transfer.max_env_steps, five.max_env_steps);
+        check_budget(&transfer, "curriculum-transfer.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.

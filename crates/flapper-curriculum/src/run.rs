@@ -42,6 +42,10 @@ pub struct CurriculumRequest<'a> {
     pub until_stage: Option<usize>,
     /// The command line, recorded in `summary.json`.
     pub command: String,
+    /// A policy (or checkpoint) the first stage starts from instead of new networks, with its
+    /// `start_noise_std`: the curriculum then fine-tunes a controller, such as the shipped one on a robot
+    /// of one's own (`None`: from scratch).
+    pub init_from: Option<PathBuf>,
 }
 
 /// Progress the caller may show: a stage starting (with its budget in `iterations`: its `max_iterations`,
@@ -98,7 +102,7 @@ pub fn run_curriculum(
     let last = request.until_stage.unwrap_or(config.stages.len()).clamp(1, config.stages.len());
     let mut outcomes: Vec<StageOutcome> = Vec::new();
     for number in 1..=last {
-        let previous = outcomes.last().map(|o| dir.join(&o.checkpoint));
+        let previous = outcomes.last().map(|o| dir.join(&o.checkpoint)).or_else(|| request.init_from.clone());
         let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
         let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
         let stage = &config.stages[number - 1];
@@ -373,6 +377,10 @@ fn run_stage(
                 train_config.clone()
             };
             run_config.runner.iterations = iterations;
+            if number == 1 && matches!(start, Start::InitFrom(_)) {
+                // The first stage's own noise, as a later stage's replaces its predecessor's.
+                run_config.runner.init_from_noise_std = stage.start_noise_std;
+            }
             let round = Round { robot, stage, number, here: &here, names: &names, set: &set, averaged };
             selection = round.train(&run_config, start, selection, progress)?;
         }

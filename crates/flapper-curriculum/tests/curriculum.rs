@@ -42,9 +42,15 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn run(dir: &Path, text: &str, until_stage: Option<usize>) -> Result<usize, String> {
+    run_from(dir, text, until_stage, None)
+}
+
+/// `run`, the first stage starting from the policy `init_from` where given.
+fn run_from(dir: &Path, text: &str, until_stage: Option<usize>, init_from: Option<&Path>) -> Result<usize, String> {
     let robot = RobotModel::flapper().unwrap();
     let config = CurriculumConfig::from_toml(text, "tiny.toml").unwrap();
-    let request = CurriculumRequest { dir, config, until_stage, command: "test".into() };
+    let init_from = init_from.map(Path::to_path_buf);
+    let request = CurriculumRequest { dir, config, until_stage, command: "test".into(), init_from };
     run_curriculum(&robot, request, &mut |_| {}).map(|stages| stages.len()).map_err(|e| e.to_string())
 }
 
@@ -212,6 +218,32 @@ fn a_missed_optional_last_stage_ends_the_run_with_the_previous_stages_controller
     let first = TINY.replacen("validate_every = 2", "validate_every = 2\noptional = true", 1);
     let e = CurriculumConfig::from_toml(&first, "tiny.toml").unwrap_err().to_string();
     assert!(e.contains("stage 1 ('cruise')") && e.contains("optional = true is allowed on the last stage only"), "{e}");
+}
+
+#[test]
+fn a_curriculum_started_from_a_policy_fine_tunes_it_with_the_first_stages_noise() {
+    let source = scratch("init-source");
+    assert_eq!(run(&source, TINY, Some(1)), Ok(1));
+    let source_policy = source.join("policy.safetensors");
+    // TINY's stage 2 alone, with a learning rate too small to move a weight.
+    let stage2 = &TINY[TINY.rfind("[[stages]]").unwrap()..];
+    let header = &TINY[..TINY.find("[[stages]]").unwrap()];
+    let text =
+        format!("{}{stage2}", header.replacen("[ppo]\n", "[ppo]\nschedule = \"fixed\"\nlearning_rate = 1e-30\n", 1));
+    let policy = |path: &Path| flapper_ppo::checkpoint::load(path).unwrap().policy;
+    let tuned = scratch("init-tuned");
+    assert_eq!(run_from(&tuned, &text, None, Some(&source_policy)), Ok(1));
+    let (from, after) = (policy(&source_policy), policy(&tuned.join("policy.safetensors")));
+    assert!(after.actor == from.actor, "the networks it started from, unmoved");
+    let noise: Vec<f32> = after.log_std.iter().map(|l| l.exp()).collect();
+    assert!(noise.iter().all(|std| (std - 0.8).abs() < 1e-4), "the stage's start_noise_std 0.8: {noise:?}");
+    // From scratch, the same stage trains other networks.
+    let fresh = scratch("init-fresh");
+    assert_eq!(run(&fresh, &text, None), Ok(1));
+    assert!(policy(&fresh.join("policy.safetensors")).actor != from.actor);
+    for dir in [source, tuned, fresh] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
 }
 
 #[test]
