@@ -77,8 +77,9 @@ pub struct StageConfig {
     pub restart_noise_std: Option<f32>,
     /// An optional last stage: one that refines a controller the stages before it already made (the
     /// efficient flight of stage 5). Missing its gate (or too little budget left to start it) does not
-    /// stop the run: the run ends with the previous stage's controller, and `summary.json` says which gate was missed and why
-    /// (`optional_stage_missed`). Only the last stage, and not the first, may be optional.
+    /// stop the run: the run ends with the previous stage's controller, and `summary.json` says which
+    /// gate was missed and why (`optional_stage_missed`). Only the last stage, and not the first, may be
+    /// optional.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub optional: bool,
     /// Judge and hand over, at each validation, the mean of the weights of the last this many
@@ -464,8 +465,8 @@ impl CurriculumConfig {
     /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
     /// run's `max_env_steps` leaves after the fewest iterations every later stage needs to hand over
     /// ([`StageConfig::least_iterations`]; an optional stage holds nothing back: a required stage meeting
-    /// its gate matters more than the refinement after it); a multiple of `validate_every` (0: no room). Keeping back the
-    /// later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
+    /// its gate matters more than the refinement after it); a multiple of `validate_every` (0: no room).
+    /// Keeping back the later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
     /// stages' caps add up to more than the run's budget by design, so a heavier robot's stage 2 still
     /// improving at its 400th iteration stopped the run with 27 M of the 30 M steps unspent.
     pub fn extension_iterations(

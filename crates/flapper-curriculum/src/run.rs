@@ -7,8 +7,9 @@
 //! A stage trains until its gate is met at a validation (from `min_iterations` on) or its budget is
 //! spent; a stage whose budget ran out while its validations still improve is given more iterations
 //! (`stageK/extensions.json`; at most [`MAX_EXTENSIONS`], within the run's budget after the later stages'),
-//! else it stops the run (an optional last stage instead ends it with the stage before it). It hands over its best validated checkpoint (never simply the last), and the next stage starts
-//! from that checkpoint with its own action noise. Running again on the same folder picks up where it
+//! else it stops the run (an optional last stage instead ends it with the stage before it). It hands over
+//! its best validated checkpoint (never simply the last), and the next stage starts from that checkpoint
+//! with its own action noise. Running again on the same folder picks up where it
 //! stopped: finished stages are read back, an interrupted one resumes from its last checkpoint (exactly,
 //! as `flapper train --resume` does), a checkpoint saved but not yet judged is judged first.
 
@@ -105,28 +106,27 @@ pub fn run_curriculum(
         let previous = outcomes.last().map(|o| dir.join(&o.checkpoint)).or_else(|| request.init_from.clone());
         let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
         let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
-        let stage = &config.stages[number - 1];
-        if let (Err(missed), true, Some(kept)) = (&result, stage.optional, outcomes.last()) {
+        if let Err(error) = &result {
             // An optional last stage refines what the stages before it made: missing its gate, or left too
-            // little budget to start, it ends the run with theirs.
-            let recorded = match missed {
+            // little budget to start, it ends the run with theirs. A required stage's missed gate stops it.
+            let stage = &config.stages[number - 1];
+            let kept = outcomes.last().filter(|_| stage.optional);
+            let missed = match error {
                 CurriculumError::GateMissed { stopped, .. } => Some(stopped.as_ref().clone()),
-                CurriculumError::BudgetSpent { .. } => Some(never_started(stage, number, missed)),
+                CurriculumError::BudgetSpent { .. } if kept.is_some() => Some(never_started(stage, number, error)),
                 _ => None,
             };
-            if let Some(recorded) = recorded {
-                let summary = Summary::new(&config, &request.command, &outcomes).optional_missed(recorded);
+            if let Some(missed) = missed {
+                // The summary and the figure show the stage that stopped or ended the run.
+                let summary = Summary::new(&config, &request.command, &outcomes);
+                let summary = if kept.is_some() { summary.optional_missed(missed) } else { summary.stopped_at(missed) };
                 summary.write(&dir.join("summary.json"))?;
                 write_figure(dir, &config, number)?;
-                progress(Progress::OptionalStageMissed { missed, kept });
-                break;
+                if let Some(kept) = kept {
+                    progress(Progress::OptionalStageMissed { missed: error, kept });
+                    break;
+                }
             }
-        }
-        if let Err(CurriculumError::GateMissed { stopped, .. }) = &result {
-            // The summary and the figure of a stopped run show the stage that stopped it.
-            let summary = Summary::new(&config, &request.command, &outcomes).stopped_at(stopped.as_ref().clone());
-            summary.write(&dir.join("summary.json"))?;
-            write_figure(dir, &config, number)?;
         }
         let outcome = result?;
         progress(Progress::StageDone { outcome: &outcome });

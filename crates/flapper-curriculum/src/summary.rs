@@ -45,8 +45,7 @@ impl Summary {
 
     /// The summary of a run that `stopped` stage's missed gate ended: its steps and time join the totals.
     pub fn stopped_at(mut self, stopped: StoppedStage) -> Self {
-        self.total_env_steps += stopped.env_steps;
-        self.total_wall_time_s += stopped.wall_time_s;
+        self.count(&stopped);
         self.stopped = Some(stopped);
         self
     }
@@ -54,10 +53,15 @@ impl Summary {
     /// The summary of a run whose optional last stage `missed` its gate: the run ends with the stages
     /// before it, and the missed stage's steps and time join the totals.
     pub fn optional_missed(mut self, missed: StoppedStage) -> Self {
-        self.total_env_steps += missed.env_steps;
-        self.total_wall_time_s += missed.wall_time_s;
+        self.count(&missed);
         self.optional_stage_missed = Some(missed);
         self
+    }
+
+    /// Adds what a stage that handed nothing over spent to the totals.
+    fn count(&mut self, stage: &StoppedStage) {
+        self.total_env_steps += stage.env_steps;
+        self.total_wall_time_s += stage.wall_time_s;
     }
 
     pub fn write(&self, path: &Path) -> Result<(), CurriculumError> {
