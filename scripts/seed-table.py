@@ -12,7 +12,9 @@ longitudinal), with --sysid the identified closed loop's validation fit (`flappe
 the efficient-bird figures (`flapper frontier --episodes 100 --seed 11`: energy per metre on longitudinal over
 the scripted gait's on the same starts, the glide fraction of its glide segment, the cruise flap frequency,
 level 3 m/s completed and RMS). Columns:
-seed, total_env_steps, total_wall_time_s, <reference>_completed (of 100), <reference>_rms_m, then
+seed, total_env_steps, total_wall_time_s, stages_trained (the stages that handed over a controller),
+optional_stage_missed (the optional last stage whose gate the run missed, ending it with the stage before's
+controller; empty if none), <reference>_completed (of 100), <reference>_rms_m, then
 nominal_bars_met and the optional robustness and sysid columns. A run that stopped at a missed gate (a
 summary, no policy) is a row of its own with empty flight columns and no bar met (its steps and time include
 the stage that missed): a seed that fails counts. With --model every flight flies that robot (the MJCF the
@@ -165,6 +167,9 @@ def main():
             "seed": summary["seed"],
             "total_env_steps": summary["total_env_steps"],
             "total_wall_time_s": round(summary["total_wall_time_s"], 1),
+            "stages_trained": len(summary["stages"]),
+            "optional_stage_missed": summary["optional_stage_missed"]["stage"]
+            if "optional_stage_missed" in summary else "",
         }
         if not (run / "policy.safetensors").is_file():
             done = len(summary["stages"])

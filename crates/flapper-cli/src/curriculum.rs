@@ -46,7 +46,8 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The command as a reader would type it: `flapper` whatever the binary's file is called.
+    let command = std::iter::once("flapper".to_owned()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     if let Some(policy) = &args.init_from {
         flapper_ppo::checkpoint::load(policy)
             .with_context(|| format!("--init-from '{}' is not a policy or checkpoint", policy.display()))?;

@@ -639,6 +639,32 @@ fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key(
     assert!(!out.join("stage1").exists(), "a refused run trains nothing");
 }
 
+/// A tiny curriculum through the command: it prints its closing line, and `summary.json` records the
+/// command as a reader would retype it (`flapper ...`, whatever the binary's file is called).
+#[test]
+fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
+    let dir = scratch("curriculum-tiny");
+    let config = dir.join("tiny.toml");
+    std::fs::write(
+        &config,
+        "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
+         actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n\
+         validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
+         gate = { completed_percent = 0 }\ntask = { stage = 1 }\n",
+    )
+    .unwrap();
+    let out = dir.join("run");
+    let output = flapper(&["curriculum", "--config", config.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.lines().any(|l| l.starts_with("done: 1 stages handed over")), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let expected = format!("flapper curriculum --config {} --out {}", config.display(), out.display());
+    assert_eq!(summary["command"], expected.as_str());
+    assert!(out.join("policy.safetensors").is_file());
+}
+
 /// `flapper frontier --policy policies/final/... --episodes 2 --seed 11`: its longitudinal figures are
 /// `flapper eval`'s (the same library calls on the same starts, at the file's decimals), its energy ratio
 /// is the policy's energy per metre over the scripted gait's, and the scripted gait's own ratio is 1.
