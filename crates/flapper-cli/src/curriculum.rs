@@ -144,10 +144,12 @@ fn report_progress(event: Progress) {
                     format!(", glide fraction {glide:.2}, energy {energy:.2} x scripted, cruise flap {hz:.2} Hz"),
                 _ => String::new(),
             },
-            match (outcome.flight_modes_met, outcome.identification_met) {
-                (Some(false), _) =>
+            match (outcome.rms_met, outcome.flight_modes_met, outcome.identification_met) {
+                (Some(false), _, _) =>
+                    "; warning: no checkpoint met the RMS bars within the budget, this one completes every reference the best (its errors are in selection.csv)",
+                (_, Some(false), _) =>
                     "; warning: no checkpoint met the flight-mode bars (energy, glide, flap frequency) within the budget, this one tracks every reference the most efficiently",
-                (_, Some(false)) =>
+                (_, _, Some(false)) =>
                     "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",
                 _ => "",
             }

@@ -26,7 +26,7 @@ use flapper_train::run::{RunError, flight_trainer, saved_config};
 use crate::config::{CurriculumConfig, Gate, StageConfig};
 use crate::error::CurriculumError;
 use crate::figure::write_curriculum_figure;
-use crate::flight_modes::{ModeFigures, flight_mode_figures, gate_asks_flight_modes};
+use crate::flight_modes::{ModeFigures, flight_mode_figures, gate_asks_flight_modes, meets_flight_mode_bars};
 use crate::identification::identification_fit_percent;
 use crate::selection::{
     Extension, GateColumns, Selection, StageOutcome, StoppedStage, Validated, meets_flight_bars,
@@ -547,23 +547,38 @@ fn choose<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<(&'a V
     }
 }
 
+/// The checkpoint a stage that will train no more hands over, and which of its sought bars it met.
+struct HandOver<'a> {
+    best: &'a Validated,
+    /// Whether the identification was met (`None`: not asked).
+    identification_met: Option<bool>,
+    /// `Some(false)` where the flight modes were sought and not met (`None`: met or not asked).
+    flight_modes_met: Option<bool>,
+    /// `Some(false)` where the RMS bars were sought and not met (`None`: met or not asked).
+    rms_met: Option<bool>,
+}
+
 /// What a stage that will train no more hands over: [`choose`]'s checkpoint, else, where the gate's
 /// flight-mode bars are sought, the most efficient checkpoint that meets every tracking bar from the gate's
 /// `min_iterations` on, else before them (a fine-tuning stage whose budget was cut short still hands over
-/// a controller that tracks, if it ever had one). With whether the identification was met (`None`: not
-/// asked) and whether the flight modes were (`None`: met or not asked).
-fn choose_at_the_end<'a>(
-    stage: &'a StageConfig,
-    selection: &'a Selection,
-) -> Option<(&'a Validated, Option<bool>, Option<bool>)> {
-    if let Some((best, identified)) = choose(stage, selection) {
-        return Some((best, identified, None));
+/// a controller that tracks, if it ever had one), else, where its RMS bars are sought, the best
+/// checkpoint that completes every reference ([`Selection::best_completing`]).
+fn choose_at_the_end<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<HandOver<'a>> {
+    if let Some((best, identification_met)) = choose(stage, selection) {
+        return Some(HandOver { best, identification_met, flight_modes_met: None, rms_met: None });
     }
-    let identified = stage.gate.identification_fit_percent.map(|_| false);
-    selection
+    let identification_met = stage.gate.identification_fit_percent.map(|_| false);
+    let tracking = selection
         .most_efficient_tracking(&stage.gate)
         .or_else(|| selection.most_efficient_tracking_from(&stage.gate, 0))
-        .map(|best| (best, identified, Some(false)))
+        .map(|best| HandOver { best, identification_met, flight_modes_met: Some(false), rms_met: None });
+    tracking.or_else(|| {
+        selection.best_completing(&stage.gate).map(|best| {
+            let modes_met = meets_flight_mode_bars(&stage.gate, best.modes.as_ref());
+            let flight_modes_met = (gate_asks_flight_modes(&stage.gate) && !modes_met).then_some(false);
+            HandOver { best, identification_met, flight_modes_met, rms_met: Some(false) }
+        })
+    })
 }
 
 /// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the
@@ -635,7 +650,7 @@ fn select(
     let chosen = choose_at_the_end(stage, selection);
     let env_steps = last.map_or(0, |l| l.env_steps);
     let wall_time_s = stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations);
-    let Some((best, identification_met, flight_modes_met)) = chosen else {
+    let Some(HandOver { best, identification_met, flight_modes_met, rms_met }) = chosen else {
         let best = selection.best();
         let stopped = StoppedStage {
             stage: number,
@@ -680,6 +695,7 @@ fn select(
         extensions,
         identification_met,
         flight_modes_met,
+        rms_met,
         glide_fraction: best.modes.map(|f| f.glide_fraction),
         energy_ratio: best.modes.map(|f| f.energy_ratio),
         cruise_flap_hz: best.modes.map(|f| f.cruise_flap_hz),
@@ -790,6 +806,9 @@ pub fn describe_gate(gate: &Gate) -> String {
         let bars: Vec<String> = gate.reference_max_rms_m.iter().map(|(name, bar)| format!("{name} {bar} m")).collect();
         text.push_str(&format!(", mean RMS error of {}", bars.join(", ")));
     }
+    if gate.rms_sought && (gate.max_rms_m.is_some() || !gate.reference_max_rms_m.is_empty()) {
+        text.push_str(" (the RMS bars sought: required only while the budget lasts)");
+    }
     if let Some(share) = gate.glide_fraction {
         text.push_str(&format!(
             ", the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
@@ -849,7 +868,7 @@ mod tests {
         stage.gate.reference_max_rms_m.clear();
         let pick = |rows: Vec<Validated>| {
             let selection = Selection { rows, columns: Default::default() };
-            choose_at_the_end(&stage, &selection).map(|(best, identified, modes)| (best.iteration, identified, modes))
+            choose_at_the_end(&stage, &selection).map(|h| (h.best.iteration, h.identification_met, h.flight_modes_met))
         };
         // Seed 3's stage 5 cut to 400 iterations: tracking at 150 (2.17 x), at none from 300 on.
         let cut_short = vec![judged(150, 10, 2.17), judged(300, 9, 2.16), judged(350, 9, 2.15), judged(400, 9, 2.2)];
@@ -860,5 +879,33 @@ mod tests {
         assert_eq!(pick(vec![judged(150, 10, 1.1), judged(300, 10, 1.15)]), Some((300, None, None)));
         // Nothing tracks: nothing handed over, the run stops.
         assert_eq!(pick(vec![judged(150, 9, 1.1), judged(300, 8, 1.15)]), None);
+    }
+
+    #[test]
+    fn the_shipped_stage_4_hands_over_a_completing_checkpoint_that_misses_its_rms_bars_marked_so() {
+        // Stage 4's gate with one reference, cruise at 0.3 m, and its identification sought.
+        let mut stage = crate::config::shipped("curriculum.toml").stages[3].clone();
+        stage.gate.reference_max_rms_m = [("cruise".to_owned(), 0.3)].into();
+        let stage = stage;
+        let pick_with = |stage: &StageConfig, rows: Vec<Validated>| {
+            let selection = Selection { rows, columns: Default::default() };
+            choose_at_the_end(stage, &selection).map(|h| (h.best.iteration, h.identification_met, h.rms_met))
+        };
+        let pick = |rows: Vec<Validated>| pick_with(&stage, rows);
+        let fits = |row: Validated, fit: f64| Validated { identification_fit_percent: Some([fit; 3]), ..row };
+        let within = fits(Validated::of_cruise(400, 10, 0.25), 85.0);
+        let looser = [Validated::of_cruise(300, 10, 0.36), Validated::of_cruise(500, 10, 0.33)];
+        // Within the bar and identified: the gate is met.
+        assert_eq!(pick(vec![looser[0].clone(), within.clone()]), Some((400, Some(true), None)));
+        // Within the bar, not identified: the identification's own fallback.
+        let unidentified = fits(within, 60.0);
+        assert_eq!(pick(vec![looser[0].clone(), unidentified]), Some((400, Some(false), None)));
+        // Never within 0.3 m: the best completing checkpoint (the least error), marked.
+        assert_eq!(pick(looser.to_vec()), Some((500, Some(false), Some(false))));
+        // Before min_iterations (300) or completing too little: nothing, the run stops.
+        assert_eq!(pick(vec![Validated::of_cruise(200, 10, 0.36), Validated::of_cruise(400, 9, 0.33)]), None);
+        // Required again, the same looser checkpoints stop the run.
+        let required = StageConfig { gate: Gate { rms_sought: false, ..stage.gate.clone() }, ..stage.clone() };
+        assert_eq!(pick_with(&required, looser.to_vec()), None);
     }
 }

@@ -181,6 +181,16 @@ impl Selection {
         best(self.rows.iter().filter(|r| meets_flight_bars(gate, r)))
     }
 
+    /// Where the gate's RMS bars are sought ([`Gate::rms_sought`]): the best checkpoint that meets its
+    /// completion bars from `min_iterations` on, whatever its RMS errors, flight modes and identification.
+    /// `None` where the RMS bars are required or no checkpoint completes.
+    pub fn best_completing<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        if !gate.rms_sought {
+            return None;
+        }
+        best(self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.completes(gate)))
+    }
+
     /// Where the gate's flight-mode bars are sought ([`Gate::flight_modes_required`] unset): among the
     /// checkpoints that meet every tracking bar (from `min_iterations` on), the one that meets the most
     /// flight-mode bars, then flies with the least energy per metre (the best score, then the earliest, of
@@ -375,6 +385,10 @@ pub struct StageOutcome {
     /// absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flight_modes_met: Option<bool>,
+    /// `false` where no checkpoint met the gate's RMS bars within the budget and the best one that meets
+    /// its completion bars was handed over ([`crate::config::Gate::rms_sought`]); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_met: Option<bool>,
     /// The selected checkpoint's flight modes ([`crate::flight_modes`]): its glide fraction, energy ratio
     /// and cruise flap frequency; absent where the gate has no flight-mode bar.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -450,9 +464,36 @@ impl Validated {
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeMap;
+
     use super::*;
 
     use Validated as V;
+
+    #[test]
+    fn sought_rms_bars_fall_back_to_the_best_checkpoint_that_completes() {
+        let selection = Selection {
+            rows: vec![
+                V::of_cruise(100, 10, 0.25), // before min_iterations: the only one within the bar
+                V::of_cruise(200, 9, 0.40),  // completes too few
+                V::of_cruise(300, 10, 0.45),
+                V::of_cruise(400, 10, 0.35),
+                V::of_cruise(500, 10, 0.38),
+            ],
+            columns: GateColumns::default(),
+        };
+        let bars = BTreeMap::from([("cruise".to_owned(), 0.3)]);
+        let gate = Gate { reference_max_rms_m: bars, min_iterations: 200, ..Gate::completing(95.0) };
+        assert!(selection.best_meeting(&gate).is_none(), "no checkpoint from 200 on within 0.3 m");
+        assert!(selection.best_completing(&gate).is_none(), "required (the default): no fallback");
+        let sought = Gate { rms_sought: true, ..gate.clone() };
+        assert!(selection.best_meeting(&sought).is_none(), "sought, the bar still holds the gate shut");
+        assert_eq!(selection.best_completing(&sought).map(|r| r.iteration), Some(400), "completes, least error");
+        let mean = Gate { max_rms_m: Some(0.3), rms_sought: true, ..Gate::completing(95.0) };
+        assert_eq!(selection.best_meeting(&mean).map(|r| r.iteration), Some(100), "met: no fallback needed");
+        let late = Gate { min_iterations: 600, ..sought };
+        assert!(selection.best_completing(&late).is_none(), "nothing from 600 on");
+    }
 
     #[test]
     fn sought_flight_modes_fall_back_to_the_most_efficient_tracking_checkpoint() {

@@ -191,6 +191,12 @@ impl Score {
 
     /// Whether the gate's bars are met (the iteration bar is the caller's).
     pub fn meets(&self, gate: &Gate) -> bool {
+        self.completes(gate) && self.rms_met(gate)
+    }
+
+    /// Whether the gate's completion bars are met (each entry's share of completed episodes, and the
+    /// procedural ones' together), its RMS bars aside.
+    pub fn completes(&self, gate: &Gate) -> bool {
         let judged_alone = |r: &&ReferenceScore| gate.procedural_completed_percent.is_none() || !r.is_procedural();
         let bar = |r: &ReferenceScore| match gate.randomized_completed_percent {
             Some(randomized) if r.is_randomized() => randomized,
@@ -203,7 +209,12 @@ impl Score {
                 (drawn().map(|r| r.completed).sum::<usize>(), drawn().map(|r| r.episodes).sum::<usize>());
             episodes == 0 || 100.0 * completed as f64 / episodes as f64 >= bar
         });
-        each && procedural && gate.max_rms_m.is_none_or(|max| self.mean_rms_m <= max) && self.rms_bars_met(gate)
+        each && procedural
+    }
+
+    /// Whether the gate's RMS bars are met: the mean over every entry (`max_rms_m`) and each entry's own.
+    pub fn rms_met(&self, gate: &Gate) -> bool {
+        gate.max_rms_m.is_none_or(|max| self.mean_rms_m <= max) && self.rms_bars_met(gate)
     }
 
     /// Whether every entry with its own RMS bar (`gate.reference_max_rms_m`) flew within it; an entry

@@ -460,6 +460,36 @@ fn an_identification_bar_is_checked_only_where_the_rest_of_the_gate_is_met_and_s
 }
 
 #[test]
+fn sought_rms_bars_hand_over_the_best_completing_checkpoint_and_required_ones_stop_the_run() {
+    let dir = scratch("rms-sought");
+    // No checkpoint of four iterations cruises within 1 mm: required (the default), the run stops.
+    let gate = "gate = { completed_percent = 0, max_rms_m = 0.001 }";
+    let text = TINY.replacen("gate = { completed_percent = 0 }", gate, 1);
+    let e = run(&dir, &text, Some(1)).unwrap_err();
+    assert!(e.contains("stage 1 ('cruise') missed its gate") && e.contains("mean RMS error at most 0.001 m"), "{e}");
+    assert!(!e.contains("RMS bars sought"), "{e}");
+    assert!(!stage_dir(&dir, 1).join("selected.json").exists(), "nothing handed over");
+    std::fs::remove_dir_all(&dir).unwrap();
+    // Sought: the stage spends its budget seeking the bar and hands over its best completing checkpoint.
+    let sought = TINY.replacen(
+        "gate = { completed_percent = 0 }",
+        "gate = { completed_percent = 0, max_rms_m = 0.001, rms_sought = true }",
+        1,
+    );
+    assert_eq!(run(&dir, &sought, Some(1)).unwrap(), 1);
+    let selected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stage_dir(&dir, 1).join("selected.json")).unwrap()).unwrap();
+    assert_eq!(selected["rms_met"], false, "{selected}");
+    assert!(selected["validation_rms_m"].as_f64().unwrap() > 0.001, "{selected}");
+    assert_eq!(selected["iterations"], 4, "the whole budget sought the bar: {selected}");
+    assert!(selected.get("flight_modes_met").is_none() && selected.get("identification_met").is_none());
+    // The same folder continues with the bar required again: rms_sought decides only at the end of the
+    // budget, so the finished stage is kept as it is.
+    assert_eq!(run(&dir, &text, Some(1)).unwrap(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn flight_mode_bars_measure_every_checkpoint_and_stop_a_stage_that_never_glides() {
     let dir = scratch("glide");
     let bars = "glide_fraction = 0.5, max_energy_ratio = 1.5, cruise_flap_hz = [4.0, 6.0]";

@@ -104,22 +104,33 @@ fn wide_robot_spans_1_10_times_ours_and_the_scripted_gait_flies_it() {
     assert_scripted_gait_flies(&robot, "wide.xml");
 }
 
-#[test]
-fn soft_servo_robot_has_0_7_times_our_servo_gains_and_the_scripted_gait_flies_it() {
-    let (shipped, robot) = (RobotModel::flapper().unwrap(), variant("soft-servos.xml"));
+/// Every PD servo's kp and kv are `factor` times ours; torque limits and mass as shipped; the scripted gait
+/// flies the robot.
+fn assert_servo_gains_scaled(file: &str, factor: f64) {
+    let (shipped, robot) = (RobotModel::flapper().unwrap(), variant(file));
     let (m0, m) = (shipped.mujoco(), robot.mujoco());
     assert_eq!(m.actuator_gainprm().len(), 5);
     for (a, (g, g0)) in m.actuator_gainprm().iter().zip(m0.actuator_gainprm()).enumerate() {
         // A position actuator: force = kp * ctrl - kp * q - kv * qdot (gain kp; bias 0, -kp, -kv).
         let (b, b0) = (m.actuator_biasprm()[a], m0.actuator_biasprm()[a]);
         assert!(g0[0] > 0.0 && b0[2] < 0.0, "actuator {a}: shipped kp {} kv {}", g0[0], -b0[2]);
-        assert!(relative(g[0], 0.7 * g0[0]) < 1e-9, "actuator {a}: kp {} against {}", g[0], g0[0]);
-        assert!(relative(b[1], 0.7 * b0[1]) < 1e-9, "actuator {a}: -kp {} against {}", b[1], b0[1]);
-        assert!(relative(b[2], 0.7 * b0[2]) < 1e-9, "actuator {a}: -kv {} against {}", b[2], b0[2]);
-        assert_eq!(m.actuator_forcerange()[a], m0.actuator_forcerange()[a], "actuator {a}: torque limits");
+        assert!(relative(g[0], factor * g0[0]) < 1e-9, "{file} actuator {a}: kp {} against {}", g[0], g0[0]);
+        assert!(relative(b[1], factor * b0[1]) < 1e-9, "{file} actuator {a}: -kp {} against {}", b[1], b0[1]);
+        assert!(relative(b[2], factor * b0[2]) < 1e-9, "{file} actuator {a}: -kv {} against {}", b[2], b0[2]);
+        assert_eq!(m.actuator_forcerange()[a], m0.actuator_forcerange()[a], "{file} actuator {a}: torque limits");
     }
     assert_eq!(robot.dimensions().total_mass_kg, shipped.dimensions().total_mass_kg);
-    assert_scripted_gait_flies(&robot, "soft-servos.xml");
+    assert_scripted_gait_flies(&robot, file);
+}
+
+#[test]
+fn soft_servo_robot_has_0_7_times_our_servo_gains_and_the_scripted_gait_flies_it() {
+    assert_servo_gains_scaled("soft-servos.xml", 0.7);
+}
+
+#[test]
+fn stiff_servo_robot_has_1_3_times_our_servo_gains_and_the_scripted_gait_flies_it() {
+    assert_servo_gains_scaled("stiff-servos.xml", 1.3);
 }
 
 /// The whole robot's centre of mass moves `shift_m` along the body x axis: only the main body's moved, by
