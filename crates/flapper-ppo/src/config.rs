@@ -14,6 +14,26 @@ pub struct InvalidSetting {
     pub why: &'static str,
 }
 
+/// The distance the temporal smoothness term ([`PpoConfig::smoothness_coef`]) prices between the actor's
+/// mean and each neighbour's.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SmoothnessNorm {
+    /// |gap|^2: its pull shrinks with the gap, so a small oscillation costs almost nothing.
+    #[default]
+    Squared,
+    /// |gap| (CAPS's own Euclidean distance, Mysore et al. 2021), smoothed below
+    /// [`crate::loss::EUCLIDEAN_SMOOTHING`]: a pull of the same strength whatever the gap, so holding still
+    /// is where the term is least, as an L1 penalty makes weights exactly zero.
+    Euclidean,
+}
+
+impl SmoothnessNorm {
+    pub fn is_squared(&self) -> bool {
+        *self == SmoothnessNorm::Squared
+    }
+}
+
 /// How the learning rate moves between updates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -63,6 +83,10 @@ pub struct PpoConfig {
     /// |mu(s_t) - mu_old(s_t+1)|^2 over the neighbours in the same episode and rollout, mu_old being
     /// the means at collection. It acts on the mean, so the exploration noise does not drown it.
     pub smoothness_coef: f32,
+    /// The distance `smoothness_coef` prices: squared (the default) or CAPS's Euclidean one.
+    /// Left out of a written config when squared, so that configs written before it read the same.
+    #[serde(skip_serializing_if = "SmoothnessNorm::is_squared")]
+    pub smoothness_norm: SmoothnessNorm,
 }
 
 impl Default for PpoConfig {
@@ -87,6 +111,7 @@ impl Default for PpoConfig {
             activation: Activation::Elu,
             init_noise_std: 1.0,
             smoothness_coef: 0.0,
+            smoothness_norm: SmoothnessNorm::Squared,
         }
     }
 }

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::actor_critic::{ActorCritic, HALF_LN_2PI};
 use crate::adam::PARAMETER_SLICE;
-use crate::config::PpoConfig;
+use crate::config::{PpoConfig, SmoothnessNorm};
 use crate::mlp::Workspace;
 
 /// Gradients of the loss, shaped like the parameters.
@@ -99,6 +99,10 @@ pub struct Minibatch {
     /// ([`crate::VecEnv::smoothness_weights`]); empty when the environment gives none (every weight 1).
     pub smoothness_weights: Vec<f32>,
 }
+
+/// Below this gap (in action units) [`SmoothnessNorm::Euclidean`] turns quadratic, sqrt(|gap|^2 + s^2) - s,
+/// so that its gradient is defined at zero; 0.01 is about a degree of flap target.
+pub const EUCLIDEAN_SMOOTHING: f32 = 0.01;
 
 /// The loss of one minibatch and its parts.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -275,10 +279,24 @@ fn policy_loss(
             let weight = batch.smoothness_weights.get(i).copied().unwrap_or(1.0);
             let neighbours = batch.neighbour_means[i * 2 * a_size..].chunks_exact(a_size);
             for neighbour in neighbours.take(batch.neighbours[i] as usize) {
-                for j in 0..a_size {
-                    let gap = mu[j] - neighbour[j];
-                    terms.smoothness += (weight * gap * gap) as f64;
-                    d_mean[local * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
+                match config.smoothness_norm {
+                    SmoothnessNorm::Squared => {
+                        for j in 0..a_size {
+                            let gap = mu[j] - neighbour[j];
+                            terms.smoothness += (weight * gap * gap) as f64;
+                            d_mean[local * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
+                        }
+                    }
+                    SmoothnessNorm::Euclidean => {
+                        // sqrt(|gap|^2 + s^2) - s and its gradient gap / sqrt(|gap|^2 + s^2).
+                        let squared: f32 = (0..a_size).map(|j| (mu[j] - neighbour[j]) * (mu[j] - neighbour[j])).sum();
+                        let norm = (squared + EUCLIDEAN_SMOOTHING * EUCLIDEAN_SMOOTHING).sqrt();
+                        terms.smoothness += (weight * (norm - EUCLIDEAN_SMOOTHING)) as f64;
+                        for j in 0..a_size {
+                            let gap = mu[j] - neighbour[j];
+                            d_mean[local * a_size + j] += config.smoothness_coef * weight * gap / norm * inv_n;
+                        }
+                    }
                 }
             }
         }
@@ -395,8 +413,13 @@ mod tests {
 
     /// Central differences, relative error per tensor, as for the MLP.
     fn check(clipped_value_loss: bool, smoothness_coef: f32, weighted: bool) {
+        check_with(clipped_value_loss, smoothness_coef, SmoothnessNorm::Squared, weighted)
+    }
+
+    fn check_with(clipped_value_loss: bool, smoothness_coef: f32, norm: SmoothnessNorm, weighted: bool) {
         let (mut policy, mut config, mut batch) = setup(clipped_value_loss);
         config.smoothness_coef = smoothness_coef;
+        config.smoothness_norm = norm;
         if weighted {
             batch.smoothness_weights = (0..batch.size).map(|i| [0.0, 0.3, 1.0][i % 3]).collect();
         }
@@ -457,6 +480,46 @@ mod tests {
         check(false, 0.0, false);
         check(true, 0.7, false);
         check(false, 0.7, true);
+        check_with(true, 0.7, SmoothnessNorm::Euclidean, false);
+        check_with(false, 0.7, SmoothnessNorm::Euclidean, true);
+    }
+
+    /// The squared distance's pull on the mean fades with the gap; the Euclidean one's does not, which
+    /// is what can make holding the wings still (no flapping cycle) worth more than a small flap.
+    #[test]
+    fn the_euclidean_smoothness_pulls_as_hard_on_a_small_gap_as_on_a_large_one() {
+        let (policy, mut config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        config.entropy_coef = 0.0;
+        config.smoothness_coef = 1.0;
+        batch.neighbours.iter_mut().for_each(|n| *n = 1);
+        // The size of the gradient on the actor's output bias when every neighbour sits `gap` above the mean.
+        let pull = |norm: SmoothnessNorm, gap: f32| {
+            let mut config = config.clone();
+            config.smoothness_norm = norm;
+            let mut batch = batch.clone();
+            let means = policy.actor.forward(&batch.observations, batch.size, &mut Workspace::default(), 1).to_vec();
+            for i in 0..batch.size {
+                for j in 0..3 {
+                    batch.neighbour_means[i * 6 + j] = means[i * 3 + j] + gap;
+                }
+            }
+            let mut grads = Gradients::zeros(&policy);
+            let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+            let bias = policy.actor.tensors().last().expect("an output bias").range.clone();
+            let size: f32 = grads.actor[bias].iter().map(|g| g * g).sum::<f32>().sqrt();
+            (size, terms.smoothness)
+        };
+        let (squared_large, _) = pull(SmoothnessNorm::Squared, 0.5);
+        let (squared_small, _) = pull(SmoothnessNorm::Squared, 0.05);
+        let (euclidean_large, distance_large) = pull(SmoothnessNorm::Euclidean, 0.5);
+        let (euclidean_small, distance_small) = pull(SmoothnessNorm::Euclidean, 0.05);
+        assert!((squared_small / squared_large - 0.1).abs() < 0.01, "{squared_small} / {squared_large}");
+        assert!(euclidean_small / euclidean_large > 0.9, "{euclidean_small} / {euclidean_large}");
+        // The distance itself: |gap| sqrt(3) less the smoothing, per neighbour.
+        let expected = |gap: f64| (3.0 * gap * gap + 1e-4f64).sqrt() - 0.01;
+        assert!((distance_large - expected(0.5)).abs() < 1e-4, "{distance_large}");
+        assert!((distance_small - expected(0.05)).abs() < 1e-4, "{distance_small}");
     }
 
     #[test]

@@ -104,6 +104,10 @@ mod tests {
         assert_eq!(c.task.stage, 2);
         let again = TrainConfig::from_toml(&c.to_toml(), "b.toml", None).unwrap();
         assert_eq!(again, c);
+        assert!(!c.to_toml().contains("smoothness_norm"), "the default norm is left out of a written config");
+        let euclidean = TrainConfig::from_toml("[ppo]\nsmoothness_norm = \"euclidean\"\n", "e.toml", None).unwrap();
+        assert_eq!(euclidean.ppo.smoothness_norm, flapper_ppo::config::SmoothnessNorm::Euclidean);
+        assert_eq!(TrainConfig::from_toml(&euclidean.to_toml(), "e2.toml", None).unwrap(), euclidean);
         let staged = TrainConfig::from_toml(&c.to_toml(), "b.toml", Some(1)).unwrap();
         assert_eq!(staged.task.stage, 1);
         assert_eq!(staged.task.reward.position_scale_m, 0.7, "the file's overrides stay");
@@ -124,6 +128,8 @@ mod tests {
         assert!(e.contains("bad.toml") && e.contains("position_wieght"), "{e}");
         let e = err("[ppo]\nactivation = \"sigmoid\"\n");
         assert!(e.contains("sigmoid"), "{e}");
+        let e = err("[ppo]\nsmoothness_norm = \"manhattan\"\n");
+        assert!(e.contains("bad.toml") && e.contains("manhattan") && e.contains("euclidean"), "{e}");
         assert!(TrainConfig::from_toml("", "x.toml", Some(7)).unwrap_err().to_string().contains("stage 7"));
     }
 }
