@@ -621,19 +621,25 @@ fn export_policy_writes_c_with_its_size_and_latency_and_refuses_bad_input_with_o
     assert_one_line_error(&output, "--format onnx exports one policy, got 2 files");
 }
 
+/// `flapper curriculum --config DIR/curriculum.toml --out DIR/run` in a fresh scratch folder `name`, with
+/// `text` as the config: the config's path, the run folder and what the command did.
+fn curriculum_in(name: &str, text: &str) -> (PathBuf, PathBuf, std::process::Output) {
+    let dir = scratch(name);
+    let config = dir.join("curriculum.toml");
+    std::fs::write(&config, text).unwrap();
+    let out = dir.join("run");
+    let output = flapper(&["curriculum", "--config", config.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    (config, out, output)
+}
+
 #[test]
 fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key() {
-    let dir = scratch("curriculum-bad");
-    let config = dir.join("curriculum.toml");
-    std::fs::write(
-        &config,
+    let (_, out, output) = curriculum_in(
+        "curriculum-bad",
         "[[stages]]\nname = \"cruise\"\nmax_iterations = 10\nvalidate_every = 5\n\
          validation = { references = [\"cruise\"], episodes = 2 }\ngate = { completed_percent = 90 }\n\
          [stages.task.control]\naction_mode = \"flap_oscillator\"\nflap_amplitud_max = 1.5\n",
-    )
-    .unwrap();
-    let out = dir.join("run");
-    let output = flapper(&["curriculum", "--config", config.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    );
     assert_one_line_error(&output, "flap_amplitud_max");
     assert!(String::from_utf8_lossy(&output.stderr).contains("stage 1"));
     assert!(!out.join("stage1").exists(), "a refused run trains nothing");
@@ -643,18 +649,13 @@ fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key(
 /// command as a reader would retype it (`flapper ...`, whatever the binary's file is called).
 #[test]
 fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
-    let dir = scratch("curriculum-tiny");
-    let config = dir.join("tiny.toml");
-    std::fs::write(
-        &config,
+    let (config, out, output) = curriculum_in(
+        "curriculum-tiny",
         "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
          actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n\
          validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
          gate = { completed_percent = 0 }\ntask = { stage = 1 }\n",
-    )
-    .unwrap();
-    let out = dir.join("run");
-    let output = flapper(&["curriculum", "--config", config.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    );
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.lines().any(|l| l.starts_with("done: 1 stages handed over")), "{stdout}");

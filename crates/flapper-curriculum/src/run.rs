@@ -884,9 +884,9 @@ mod tests {
     #[test]
     fn the_shipped_stage_4_hands_over_a_completing_checkpoint_that_misses_its_rms_bars_marked_so() {
         // Stage 4's gate with one reference, cruise at 0.3 m, and its identification sought.
-        let mut stage = crate::config::shipped("curriculum.toml").stages[3].clone();
-        stage.gate.reference_max_rms_m = [("cruise".to_owned(), 0.3)].into();
-        let stage = stage;
+        let shipped = crate::config::shipped("curriculum.toml").stages[3].clone();
+        let gate = Gate { reference_max_rms_m: [("cruise".to_owned(), 0.3)].into(), ..shipped.gate.clone() };
+        let stage = StageConfig { gate, ..shipped };
         let pick_with = |stage: &StageConfig, rows: Vec<Validated>| {
             let selection = Selection { rows, columns: Default::default() };
             choose_at_the_end(stage, &selection).map(|h| (h.best.iteration, h.identification_met, h.rms_met))
