@@ -623,7 +623,7 @@ fn export_policy_writes_c_with_its_size_and_latency_and_refuses_bad_input_with_o
 
 /// `flapper curriculum --config DIR/curriculum.toml --out DIR/run` in a fresh scratch folder `name`, with
 /// `text` as the config: the config's path, the run folder and what the command did.
-fn curriculum_in(name: &str, text: &str) -> (PathBuf, PathBuf, std::process::Output) {
+fn curriculum_in(name: &str, text: &str) -> (PathBuf, PathBuf, Output) {
     let dir = scratch(name);
     let config = dir.join("curriculum.toml");
     std::fs::write(&config, text).unwrap();
