@@ -715,6 +715,23 @@ task = { stage = 2 }
         assert_eq!(transfer.stages, five.stages[3..], "stages 4 and 5 as shipped");
         assert_eq!(transfer.max_env_steps, five.max_env_steps);
         check_budget(&transfer, "curriculum-transfer.toml");
+
+        // CAPS's Euclidean smoothness in the efficient stage: alone from a controller (E3, E6), and in the
+        // whole curriculum lifted in manoeuvres (E6t); the stage asks the glide besides its bars.
+        use flapper_ppo::config::SmoothnessNorm;
+        let alone = shipped("experiments/curriculum-euclidean-smoothness.toml");
+        assert_eq!(alone.stages.len(), 1);
+        assert!(!alone.stages[0].optional, "the only stage cannot be optional");
+        let turns = shipped("experiments/curriculum-euclidean-smoothness-turns.toml");
+        assert!(turns.stages[..4] == five.stages[..4] && turns.max_env_steps == five.max_env_steps);
+        for (config, k) in [(&alone, 1), (&turns, 5)] {
+            let stage = config.stage_train_config(k).unwrap();
+            assert_eq!(stage.ppo.smoothness_norm, SmoothnessNorm::Euclidean);
+            assert_eq!(stage.ppo.desired_kl, 0.005, "the shipped stage's other settings kept");
+            assert_eq!(config.stages[k - 1].gate.glide_fraction, Some(0.5));
+        }
+        assert_eq!(turns.stage_train_config(5).unwrap().task.reward.smoothness_turn_scale_degps, 60.0);
+        check_budget(&turns, "curriculum-euclidean-smoothness-turns.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
