@@ -79,9 +79,10 @@ pub struct PpoConfig {
     /// Initial standard deviation of every action (the log-std is learned, state-independent).
     pub init_noise_std: f32,
     /// Weight of the temporal smoothness of the actor's mean (CAPS, Mysore et al. 2021; not rsl_rl's,
-    /// 0 = off): the loss adds this times the mean over samples of |mu(s_t) - mu_old(s_t-1)|^2 +
-    /// |mu(s_t) - mu_old(s_t+1)|^2 over the neighbours in the same episode and rollout, mu_old being
-    /// the means at collection. It acts on the mean, so the exploration noise does not drown it.
+    /// 0 = off): the loss adds this times the mean over samples of d(mu(s_t), mu_old(s_t-1)) +
+    /// d(mu(s_t), mu_old(s_t+1)) over the neighbours in the same episode and rollout, mu_old being
+    /// the means at collection and d the distance `smoothness_norm` names (by default the squared one).
+    /// It acts on the mean, so the exploration noise does not drown it.
     pub smoothness_coef: f32,
     /// The distance `smoothness_coef` prices: squared (the default) or CAPS's Euclidean one.
     /// Left out of a written config when squared, so that configs written before it read the same.
