@@ -732,6 +732,24 @@ task = { stage = 2 }
         }
         assert_eq!(turns.stage_train_config(5).unwrap().task.reward.smoothness_turn_scale_degps, 60.0);
         check_budget(&turns, "curriculum-euclidean-smoothness-turns.toml");
+
+        // gF's recipe, weighed on glide slopes with the noise restarted low: alone from a controller, and
+        // as a sixth stage after the shipped five, which stay as they are but for stage 5 no longer being
+        // the optional last one.
+        let slopes = shipped("experiments/curriculum-euclidean-glide-slopes.toml");
+        let sixth = shipped("experiments/curriculum-glide-stage.toml");
+        assert!(sixth.stages[..4] == five.stages[..4] && sixth.max_env_steps == five.max_env_steps);
+        assert_eq!(sixth.stages[4], StageConfig { optional: false, ..five.stages[4].clone() });
+        assert!(sixth.stages[5].optional && sixth.stages[5].name == "glide");
+        for (config, k) in [(&slopes, 1), (&sixth, 6)] {
+            let stage = config.stage_train_config(k).unwrap();
+            assert_eq!(stage.ppo.smoothness_norm, SmoothnessNorm::Euclidean);
+            assert_eq!((stage.ppo.smoothness_coef, stage.ppo.desired_kl), (0.03, 0.005));
+            assert_eq!(stage.task.reward.smoothness_glide_gain, 9.0);
+            assert_eq!(config.stages[k - 1].start_noise_std, Some(0.25), "the noise restarted low");
+            assert_eq!(config.stages[k - 1].gate.glide_fraction, Some(0.5));
+        }
+        check_budget(&sixth, "curriculum-glide-stage.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
