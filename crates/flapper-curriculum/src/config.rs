@@ -75,11 +75,12 @@ pub struct StageConfig {
     /// standard deviation, for as many iterations as an extension gets (within the run's budget).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart_noise_std: Option<f32>,
-    /// An optional last stage: one that refines a controller the stages before it already made (the
+    /// An optional stage: one that refines a controller the stages before it already made (the
     /// efficient flight of stage 5). Missing its gate (or too little budget left to start it) does not
-    /// stop the run: the run ends with the previous stage's controller, and `summary.json` says which
-    /// gate was missed and why (`optional_stage_missed`). Only the last stage, and not the first, may be
-    /// optional.
+    /// stop the run: the run ends with the previous stage's controller (the optional stages after it
+    /// are not run), and `summary.json` says which gate was missed and why (`optional_stage_missed`).
+    /// Only the last stages may be optional (no required stage after an optional one), and not the
+    /// first.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub optional: bool,
     /// Judge and hand over, at each validation, the mean of the weights of the last this many
@@ -397,10 +398,12 @@ impl CurriculumConfig {
                     "average_checkpoints must be in [1, {MAX_AVERAGED_CHECKPOINTS}], got {count}"
                 )));
             }
-            if stage.optional && (number == 1 || number < config.stages.len()) {
+            let required_after = config.stages[number..].iter().any(|later| !later.optional);
+            if stage.optional && (number == 1 || required_after) {
                 return Err(bad(format!(
-                    "optional = true is allowed on the last stage only, after at least one other (this is stage \
-                     {number} of {}): a missed optional stage ends the run with the previous stage's controller",
+                    "optional = true is allowed on the last stages only, after at least one required stage and \
+                     with no required stage after it (this is stage {number} of {}): a missed optional stage \
+                     ends the run with the previous stage's controller",
                     config.stages.len()
                 )));
             }
@@ -718,8 +721,9 @@ task = { stage = 2 }
 
         // CAPS's Euclidean smoothness in the efficient stage: alone from a controller (E3, E6), in the whole
         // curriculum lifted in manoeuvres (E6t), and gF's recipe (weighed on glide slopes, the noise restarted
-        // low) alone and as a sixth stage after the shipped five, which stay as they are but for stage 5 no
-        // longer being the optional last one; each stage asks the glide besides its bars.
+        // low) alone and as a sixth stage after the shipped five, which stay as they are (stages 5 and 6 both
+        // optional: a missed stage 5 ends the run with stage 4's controller); each stage asks the glide
+        // besides its bars.
         use flapper_ppo::config::SmoothnessNorm;
         let alone = shipped("experiments/curriculum-euclidean-smoothness.toml");
         assert_eq!(alone.stages.len(), 1);
@@ -730,7 +734,7 @@ task = { stage = 2 }
         for config in [&turns, &sixth] {
             assert!(config.stages[..4] == five.stages[..4] && config.max_env_steps == five.max_env_steps);
         }
-        assert_eq!(sixth.stages[4], StageConfig { optional: false, ..five.stages[4].clone() });
+        assert_eq!(sixth.stages[4], five.stages[4]);
         assert!(sixth.stages[5].optional && sixth.stages[5].name == "glide");
         for (config, k) in [(&alone, 1), (&turns, 5), (&slopes, 1), (&sixth, 6)] {
             let stage = config.stage_train_config(k).unwrap();

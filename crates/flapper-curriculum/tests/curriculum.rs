@@ -214,10 +214,28 @@ fn a_missed_optional_last_stage_ends_the_run_with_the_previous_stages_controller
     assert!(e.contains("stage 2 ('climb and dive') missed its gate"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
 
-    // Only the last stage, after another, may be optional.
+    // A trailing run of optional stages: the first one missed ends the run there, the later ones never
+    // start (a refinement of a controller the run did not keep).
+    let dir = scratch("optional-trailing");
+    let third = "[[stages]]\nname = \"glide\"\nmax_iterations = 2\nvalidate_every = 1\noptional = true\n\
+                 validation = { references = [\"cruise\"], episodes = 1 }\ngate = { completed_percent = 0 }\n\
+                 task = { stage = 2 }\n";
+    let trailing = format!("{text}{third}");
+    assert_eq!(run(&dir, &trailing, None), Ok(1), "stage 1's controller again");
+    assert_eq!(summary(&dir)["optional_stage_missed"]["stage"], 2);
+    assert!(!dir.join("stage3").exists(), "the stage after the missed one never started");
+    std::fs::remove_dir_all(dir).unwrap();
+
+    // Only the last stages, after a required one, may be optional.
     let first = TINY.replacen("validate_every = 2", "validate_every = 2\noptional = true", 1);
     let e = CurriculumConfig::from_toml(&first, "tiny.toml").unwrap_err().to_string();
-    assert!(e.contains("stage 1 ('cruise')") && e.contains("optional = true is allowed on the last stage only"), "{e}");
+    assert!(
+        e.contains("stage 1 ('cruise')") && e.contains("optional = true is allowed on the last stages only"),
+        "{e}"
+    );
+    let required_after = format!("{}{}", text, third.replacen("optional = true\n", "", 1));
+    let e = CurriculumConfig::from_toml(&required_after, "tiny.toml").unwrap_err().to_string();
+    assert!(e.contains("stage 2 ('climb and dive')") && e.contains("no required stage after it"), "{e}");
 }
 
 #[test]

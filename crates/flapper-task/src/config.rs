@@ -149,6 +149,10 @@ pub struct RewardConfig {
     /// glide slope, which the robot can fly with its wings held, asks for a held stroke; level flight,
     /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
     pub smoothness_glide_gain: f64,
+    /// The share of the smoothness weight kept where the reference dives steeper than a glide slope
+    /// (the dives of `energy_dive_share`), where the robot must flap to brake and hold the path: 1 weighs
+    /// a dive as level flight, 0 asks no steady stroke there at all.
+    pub smoothness_dive_share: f64,
     /// Prices the energy by the reference's speed: in full at or above this speed (m/s), less and less
     /// over the [`SPEED_RAMP_MPS`] below it and not at all further down, where r_energy reads
     /// its top (1) whatever the power. Slow flight needs power (the robot's power curve rises below
@@ -333,6 +337,7 @@ impl RewardConfig {
         self.smoothness_turn_scale_degps > 0.0
             || self.smoothness_min_speed_mps > 0.0
             || self.smoothness_glide_gain > 0.0
+            || self.smoothness_dive_share < 1.0
     }
 }
 
@@ -352,6 +357,7 @@ impl Default for RewardConfig {
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
+            smoothness_dive_share: 1.0,
             energy_min_speed_mps: 0.0,
             energy_glide_gain: 0.0,
             energy_dive_share: 1.0,
@@ -560,6 +566,7 @@ impl TaskConfig {
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
             ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
             ("reward.energy_dive_share", r.energy_dive_share, 0.0, 1.0),
+            ("reward.smoothness_dive_share", r.smoothness_dive_share, 0.0, 1.0),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),
@@ -731,6 +738,8 @@ mod tests {
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = refused("[reward]\nenergy_dive_share = 1.5\n");
         assert!(err.contains("reward.energy_dive_share") && err.contains("1.5"), "{err}");
+        let err = refused("[reward]\nsmoothness_dive_share = -0.5\n");
+        assert!(err.contains("reward.smoothness_dive_share") && err.contains("-0.5"), "{err}");
         let err = refused("[reward]\nenergy_glide_gain = -2\n");
         assert!(err.contains("reward.energy_glide_gain") && err.contains("-2"), "{err}");
         let err = refused("[reward]\nsmoothness_turn_scale_degps = -30\n");

@@ -390,7 +390,8 @@ impl FlightEnv {
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
     /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
     /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0), times
-    /// 1 + `reward.smoothness_glide_gain` x [`Self::glide_share`].
+    /// 1 + `reward.smoothness_glide_gain` x [`Self::glide_share`], or times `reward.smoothness_dive_share`
+    /// on steeper descents.
     pub fn smoothness_weight(&self) -> f32 {
         let reward = &self.config.reward;
         let mut weight = 1.0;
@@ -401,6 +402,9 @@ impl FlightEnv {
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         if reward.smoothness_glide_gain > 0.0 {
             weight *= 1.0 + reward.smoothness_glide_gain * self.glide_share();
+        }
+        if reward.smoothness_dive_share < 1.0 && self.dives() {
+            weight *= reward.smoothness_dive_share;
         }
         weight as f32
     }

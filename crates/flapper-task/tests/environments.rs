@@ -535,6 +535,29 @@ fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climb
 }
 
 #[test]
+fn the_smoothness_weight_in_steep_dives_is_its_share_and_glide_slopes_are_not_dives() {
+    let first_weight = |reference: Arc<Reference>, dive_share: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.smoothness_glide_gain = 9.0;
+        config.reward.smoothness_dive_share = dive_share;
+        assert!(config.reward.weighs_smoothness());
+        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        env.smoothness_weight()
+    };
+    assert_eq!(first_weight(sloped(-1.5), 0.0), 0.0, "longitudinal's dive, 2.5 : 1: no steady stroke asked");
+    assert!((first_weight(sloped(-1.5), 0.25) - 0.25).abs() < 1e-6, "a dive: its share of level flight's 1");
+    assert_eq!(first_weight(sloped(-1.5), 1.0), 1.0, "1: a dive weighs as level flight");
+    for (vertical, weight, what) in [(-0.83, 10.0, "a glide slope"), (0.0, 1.0, "level"), (0.8, 1.0, "a climb")] {
+        let shared = first_weight(sloped(vertical), 0.0);
+        assert!((shared - weight).abs() < 1e-4, "{what}: no dive, weighed as without the share: {shared}");
+        assert_eq!(shared, first_weight(sloped(vertical), 1.0), "{what}: bit for bit");
+    }
+    let mut off = TaskConfig::default();
+    off.reward.smoothness_dive_share = 0.5;
+    assert!(off.reward.weighs_smoothness(), "a share below 1 alone weighs the term per step");
+}
+
+#[test]
 fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
     let flown = |reference: Arc<Reference>, gain: f64| {
         let mut config = TaskConfig::default();
