@@ -751,6 +751,26 @@ task = { stage = 2 }
             assert_eq!(config.stages[k - 1].start_noise_std, Some(0.25), "the noise restarted low");
         }
         check_budget(&sixth, "curriculum-glide-stage.toml");
+
+        // gS: the price on glide slopes only (a tenth of gF's everywhere, x100 on glide slopes: the same
+        // 0.3 there), validated every 25, alone and as the sixth stage.
+        let slope_only = shipped("experiments/curriculum-glide-slope-smoothness.toml");
+        let slope_stage = shipped("experiments/curriculum-glide-slope-stage.toml");
+        assert!(slope_stage.stages[..5] == five.stages[..] && slope_stage.max_env_steps == five.max_env_steps);
+        assert!(slope_stage.stages[4].optional && slope_stage.stages[5].optional, "both refinements optional");
+        for (config, k) in [(&slope_only, 1), (&slope_stage, 6)] {
+            let stage = config.stage_train_config(k).unwrap();
+            assert_eq!(stage.ppo.smoothness_norm, SmoothnessNorm::Euclidean);
+            assert_eq!(stage.ppo.smoothness_coef, 0.003);
+            assert_eq!(stage.task.reward.smoothness_glide_gain, 99.0);
+            let on_glide_slopes = stage.ppo.smoothness_coef * (1.0 + stage.task.reward.smoothness_glide_gain);
+            assert!((on_glide_slopes - 0.3).abs() < 1e-9, "gF's price on glide slopes: {on_glide_slopes}");
+            assert_eq!(config.stages[k - 1].validate_every, 25);
+            assert_eq!(config.stages[k - 1].start_noise_std, Some(0.25));
+            assert_eq!(config.stages[k - 1].gate.glide_fraction, Some(0.5));
+        }
+        assert_eq!(slope_only.stages[0].max_iterations, slopes.stages[0].max_iterations);
+        check_budget(&slope_stage, "curriculum-glide-slope-stage.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
