@@ -763,8 +763,9 @@ task = { stage = 2 }
             assert_eq!(stage.ppo.smoothness_norm, SmoothnessNorm::Euclidean);
             assert_eq!(stage.ppo.smoothness_coef, 0.003);
             assert_eq!(stage.task.reward.smoothness_glide_gain, 99.0);
-            let on_glide_slopes = stage.ppo.smoothness_coef * (1.0 + stage.task.reward.smoothness_glide_gain);
-            assert!((on_glide_slopes - 0.3).abs() < 1e-9, "gF's price on glide slopes: {on_glide_slopes}");
+            let on_glide_slopes =
+                f64::from(stage.ppo.smoothness_coef) * (1.0 + stage.task.reward.smoothness_glide_gain);
+            assert!((on_glide_slopes - 0.3).abs() < 1e-6, "gF's price on glide slopes: {on_glide_slopes}");
             assert_eq!(config.stages[k - 1].validate_every, 25);
             assert_eq!(config.stages[k - 1].start_noise_std, Some(0.25));
             assert_eq!(config.stages[k - 1].gate.glide_fraction, Some(0.5));
