@@ -7,7 +7,7 @@
 //! A stage trains until its gate is met at a validation (from `min_iterations` on) or its budget is
 //! spent; a stage whose budget ran out while its validations still improve is given more iterations
 //! (`stageK/extensions.json`; at most [`MAX_EXTENSIONS`], within the run's budget after the later stages'),
-//! else it stops the run (an optional last stage instead ends it with the stage before it). It hands over
+//! else it stops the run (an optional stage instead ends it with the stage before it). It hands over
 //! its best validated checkpoint (never simply the last), and the next stage starts from that checkpoint
 //! with its own action noise. Running again on the same folder picks up where it
 //! stopped: finished stages are read back, an interrupted one resumes from its last checkpoint (exactly,
@@ -76,7 +76,7 @@ pub enum Progress<'a> {
     StageDone {
         outcome: &'a StageOutcome,
     },
-    /// The optional last stage missed its gate or could not start for the budget (`missed`, the error a
+    /// An optional stage missed its gate or could not start for the budget (`missed`, the error a
     /// stopped run would end with): the run ends with the controller `kept` handed over.
     OptionalStageMissed {
         missed: &'a CurriculumError,
@@ -107,7 +107,7 @@ pub fn run_curriculum(
         let spent_env_steps = outcomes.iter().map(|o| o.env_steps).sum();
         let result = run_stage(robot, &config, dir, number, previous, spent_env_steps, progress);
         if let Err(error) = &result {
-            // An optional last stage refines what the stages before it made: missing its gate, or left too
+            // An optional stage refines what the stages before it made: missing its gate, or left too
             // little budget to start, it ends the run with theirs. A required stage's missed gate stops it.
             let stage = &config.stages[number - 1];
             let kept = outcomes.last().filter(|_| stage.optional);

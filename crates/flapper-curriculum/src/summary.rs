@@ -1,6 +1,6 @@
 //! `summary.json`: the seed, the command, and per stage its iterations, environment steps, wall time,
 //! the checkpoint it handed over and that checkpoint's validation score; for a run stopped by a missed
-//! gate, that stage's spending and best score (`stopped`); for a run whose optional last stage missed its
+//! gate, that stage's spending and best score (`stopped`); for a run ended by an optional stage that missed its
 //! gate, the same for that stage (`optional_stage_missed`), the run ending with the stage before it; the
 //! totals, the stopped or missed stage included.
 
@@ -20,7 +20,7 @@ pub struct Summary {
     /// The stage whose missed gate stopped the run; absent in a run that did not stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<StoppedStage>,
-    /// The optional last stage whose gate was missed, or which the budget left too little to start
+    /// The optional stage whose gate was missed, or which the budget left too little to start
     /// (`iterations` 0; [`crate::config::StageConfig::optional`]): the run ended with the controller of the
     /// last of `stages`, not this one's. Absent where none was missed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -50,7 +50,7 @@ impl Summary {
         self
     }
 
-    /// The summary of a run whose optional last stage `missed` its gate: the run ends with the stages
+    /// The summary of a run whose optional stage `missed` its gate: the run ends with the stages
     /// before it, and the missed stage's steps and time join the totals.
     pub fn optional_missed(mut self, missed: StoppedStage) -> Self {
         self.count(&missed);

@@ -182,7 +182,7 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
 }
 
 #[test]
-fn a_missed_optional_last_stage_ends_the_run_with_the_previous_stages_controller() {
+fn a_missed_optional_stage_ends_the_run_with_the_previous_stages_controller() {
     let dir = scratch("optional");
     let missed = "gate = { completed_percent = 100, min_iterations = 4 }";
     let text = TINY.replacen("start_noise_std = 0.8", "start_noise_std = 0.8\noptional = true", 1).replacen(
