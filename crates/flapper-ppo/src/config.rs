@@ -88,6 +88,12 @@ pub struct PpoConfig {
     /// Left out of a written config when squared, so that configs written before it read the same.
     #[serde(skip_serializing_if = "SmoothnessNorm::is_squared")]
     pub smoothness_norm: SmoothnessNorm,
+    /// Each action's share of the smoothness distance, in action order: its gap to the neighbours'
+    /// means is multiplied by this before `smoothness_norm` measures it (0 leaves that action unpriced).
+    /// Empty (the default, left out of a written config) prices every action alike; otherwise one
+    /// number per action, each in [0, 1000].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub smoothness_action_scale: Vec<f32>,
 }
 
 impl Default for PpoConfig {
@@ -113,6 +119,7 @@ impl Default for PpoConfig {
             init_noise_std: 1.0,
             smoothness_coef: 0.0,
             smoothness_norm: SmoothnessNorm::Squared,
+            smoothness_action_scale: Vec::new(),
         }
     }
 }
@@ -183,6 +190,13 @@ impl PpoConfig {
                 return Err(InvalidSetting { key, value: value.to_string(), why });
             }
         }
+        if let Some(bad) = self.smoothness_action_scale.iter().find(|&&s| !not_negative(s, 1e3)) {
+            return Err(InvalidSetting {
+                key: "ppo.smoothness_action_scale",
+                value: bad.to_string(),
+                why: "each action's share must be in [0, 1000]",
+            });
+        }
         for (key, sizes) in [("ppo.actor_hidden", &self.actor_hidden), ("ppo.critic_hidden", &self.critic_hidden)] {
             if sizes.is_empty() || sizes.iter().any(|&s| s == 0 || s > 4096) {
                 return Err(InvalidSetting {
@@ -193,6 +207,31 @@ impl PpoConfig {
             }
         }
         Ok(())
+    }
+}
+
+impl PpoConfig {
+    /// Checks the settings that depend on the environment's actions (`action_names`, in action order).
+    pub fn validate_for_actions(&self, action_names: &[&str]) -> Result<(), InvalidSetting> {
+        let scales = &self.smoothness_action_scale;
+        if !scales.is_empty() && scales.len() != action_names.len() {
+            return Err(InvalidSetting {
+                key: "ppo.smoothness_action_scale",
+                value: format!(
+                    "{scales:?} ({} shares for the {} actions {})",
+                    scales.len(),
+                    action_names.len(),
+                    action_names.join(", ")
+                ),
+                why: "needs one share per action, in that order, or none",
+            });
+        }
+        Ok(())
+    }
+
+    /// The share of action `j` in the smoothness distance (1 where `smoothness_action_scale` is empty).
+    pub fn smoothness_scale(&self, j: usize) -> f32 {
+        self.smoothness_action_scale.get(j).copied().unwrap_or(1.0)
     }
 }
 

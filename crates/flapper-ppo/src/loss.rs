@@ -279,22 +279,26 @@ fn policy_loss(
             let weight = batch.smoothness_weights.get(i).copied().unwrap_or(1.0);
             let neighbours = batch.neighbour_means[i * 2 * a_size..].chunks_exact(a_size);
             for neighbour in neighbours.take(batch.neighbours[i] as usize) {
+                // Each action's gap is scaled by its share (1 for every action unless
+                // `smoothness_action_scale` says otherwise; x 1 changes no bit).
+                let gap = |j: usize| (mu[j] - neighbour[j]) * config.smoothness_scale(j);
                 match config.smoothness_norm {
                     SmoothnessNorm::Squared => {
                         for j in 0..a_size {
-                            let gap = mu[j] - neighbour[j];
+                            let gap = gap(j);
                             terms.smoothness += (weight * gap * gap) as f64;
-                            d_mean[local * a_size + j] += 2.0 * config.smoothness_coef * weight * gap * inv_n;
+                            d_mean[local * a_size + j] +=
+                                2.0 * config.smoothness_coef * weight * gap * config.smoothness_scale(j) * inv_n;
                         }
                     }
                     SmoothnessNorm::Euclidean => {
                         // sqrt(|gap|^2 + s^2) - s and its gradient gap / sqrt(|gap|^2 + s^2).
-                        let squared: f32 = (0..a_size).map(|j| (mu[j] - neighbour[j]) * (mu[j] - neighbour[j])).sum();
+                        let squared: f32 = (0..a_size).map(|j| gap(j) * gap(j)).sum();
                         let norm = (squared + EUCLIDEAN_SMOOTHING * EUCLIDEAN_SMOOTHING).sqrt();
                         terms.smoothness += (weight * (norm - EUCLIDEAN_SMOOTHING)) as f64;
                         for j in 0..a_size {
-                            let gap = mu[j] - neighbour[j];
-                            d_mean[local * a_size + j] += config.smoothness_coef * weight * gap / norm * inv_n;
+                            d_mean[local * a_size + j] +=
+                                config.smoothness_coef * weight * gap(j) * config.smoothness_scale(j) / norm * inv_n;
                         }
                     }
                 }
@@ -482,6 +486,60 @@ mod tests {
         check(false, 0.7, true);
         check_with(true, 0.7, SmoothnessNorm::Euclidean, false);
         check_with(false, 0.7, SmoothnessNorm::Euclidean, true);
+    }
+
+    /// Each action's share scales its gap before the distance is taken, in the loss and its gradient.
+    #[test]
+    fn the_loss_gradients_match_finite_differences_with_per_action_smoothness_shares() {
+        for norm in [SmoothnessNorm::Squared, SmoothnessNorm::Euclidean] {
+            scaled_check(norm, vec![1.0, 0.0, 2.5]);
+        }
+    }
+
+    fn scaled_check(norm: SmoothnessNorm, scale: Vec<f32>) {
+        let (policy, mut config, batch) = setup(false);
+        config.smoothness_coef = 0.7;
+        config.smoothness_norm = norm;
+        config.smoothness_action_scale = scale;
+        let mut grads = Gradients::zeros(&policy);
+        loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
+        let bias = policy.actor.tensors().last().expect("an output bias").range.clone();
+        let eps = 2e-3f32;
+        for i in bias {
+            let mut moved = policy.clone();
+            moved.actor.params_mut()[i] += eps;
+            let up = loss(&moved, &config, &batch);
+            moved.actor.params_mut()[i] -= 2.0 * eps;
+            let down = loss(&moved, &config, &batch);
+            let numeric = (up - down) / (2.0 * eps as f64);
+            let analytic = grads.actor[i] as f64;
+            assert!(
+                (numeric - analytic).abs() < 3e-2 * (2e-3 + numeric.abs().max(analytic.abs())),
+                "{norm:?}, output bias {i}: {analytic} analytic, {numeric} numeric"
+            );
+        }
+    }
+
+    /// An action whose share is 0 is not pulled at all; the others are pulled as without shares when
+    /// the distance is squared (each action's term is its own).
+    #[test]
+    fn an_action_with_no_smoothness_share_is_not_pulled_towards_its_neighbours() {
+        let (policy, mut config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        config.entropy_coef = 0.0;
+        config.smoothness_coef = 1.0;
+        let output_bias_gradient = |config: &PpoConfig| {
+            let mut grads = Gradients::zeros(&policy);
+            loss_and_gradients(&policy, config, &batch, &mut LossScratch::default(), &mut grads, 1);
+            let bias = policy.actor.tensors().last().expect("an output bias").range.clone();
+            grads.actor[bias].to_vec()
+        };
+        let all = output_bias_gradient(&config);
+        config.smoothness_action_scale = vec![1.0, 0.0, 1.0];
+        let shared = output_bias_gradient(&config);
+        assert!(all[1].abs() > 1e-6, "the smoothness pulls action 1 without shares: {all:?}");
+        assert_eq!(shared[1], 0.0, "{shared:?}");
+        assert_eq!((shared[0], shared[2]), (all[0], all[2]));
     }
 
     /// The squared distance's pull on the mean fades with the gap; the Euclidean one's does not, which

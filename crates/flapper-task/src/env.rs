@@ -370,28 +370,20 @@ impl FlightEnv {
     }
 
     /// The share of the energy's price paid at the current step: the speed ramp of
-    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times 1 +
-    /// `reward.energy_glide_gain` x [`Self::glide_share`] on glide slopes, or times
-    /// `reward.energy_dive_share` on steeper descents.
+    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times the
+    /// [`Self::slope_factor`] of `reward.energy_glide_gain` and `reward.energy_dive_share`.
     pub fn energy_price_share(&self) -> f64 {
         let reward = &self.config.reward;
         let min_speed = reward.energy_min_speed_mps;
-        let mut share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
-        if reward.energy_glide_gain > 0.0 {
-            share *= 1.0 + reward.energy_glide_gain * self.glide_share();
-        }
-        if reward.energy_dive_share < 1.0 && self.dives() {
-            share *= reward.energy_dive_share;
-        }
-        share
+        let share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
+        share * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
     }
 
     /// The weight of the learner's smoothness term for the action chosen at the current observation:
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead and scale
     /// `reward.smoothness_turn_scale_degps` (1 where that is 0), times the speed ramp of
-    /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0), times
-    /// 1 + `reward.smoothness_glide_gain` x [`Self::glide_share`], or times `reward.smoothness_dive_share`
-    /// on steeper descents.
+    /// `reward.smoothness_min_speed_mps` at the reference's current speed (1 where that is 0), times the
+    /// [`Self::slope_factor`] of `reward.smoothness_glide_gain` and `reward.smoothness_dive_share`.
     pub fn smoothness_weight(&self) -> f32 {
         let reward = &self.config.reward;
         let mut weight = 1.0;
@@ -400,34 +392,24 @@ impl FlightEnv {
             weight *= (-(turn / reward.smoothness_turn_scale_degps).powi(2)).exp();
         }
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
-        if reward.smoothness_glide_gain > 0.0 {
-            weight *= 1.0 + reward.smoothness_glide_gain * self.glide_share();
-        }
-        if reward.smoothness_dive_share < 1.0 && self.dives() {
-            weight *= reward.smoothness_dive_share;
-        }
+        weight *= self.slope_factor(reward.smoothness_glide_gain, reward.smoothness_dive_share);
         weight as f32
     }
 
-    /// Whether the reference descends steeper than a glide slope at the current step (sinking faster
-    /// than its horizontal speed over [`GLIDE_MIN_RATIO`]).
-    fn dives(&self) -> bool {
-        let (sink, horizontal) = self.sink_and_horizontal_mps();
-        sink > 0.0 && horizontal < GLIDE_MIN_RATIO * sink
-    }
-
-    /// How much of a glide the reference asks at the current step: its sink rate over
-    /// [`GLIDE_SINK_MPS`] (at most 1) where it sinks at a slope the robot can glide (no steeper than
-    /// [`GLIDE_MIN_RATIO`]), 0 on level paths, climbs and steeper dives.
-    fn glide_share(&self) -> f64 {
-        let (sink, horizontal) = self.sink_and_horizontal_mps();
-        if sink > 0.0 && horizontal >= GLIDE_MIN_RATIO * sink { (sink / GLIDE_SINK_MPS).min(1.0) } else { 0.0 }
-    }
-
-    /// The reference's sink rate (positive downwards) and horizontal speed at the current step.
-    fn sink_and_horizontal_mps(&self) -> (f64, f64) {
+    /// A reward term's factor for the slope the reference flies at the current step: 1 +
+    /// `glide_gain` x its glide share where it sinks at a slope the robot can glide (no steeper than
+    /// [`GLIDE_MIN_RATIO`]; the share is the sink rate over [`GLIDE_SINK_MPS`], at most 1), `dive_share`
+    /// where it sinks steeper, 1 on level paths and climbs.
+    fn slope_factor(&self, glide_gain: f64, dive_share: f64) -> f64 {
         let velocity = self.reference.velocity(self.step);
-        (-velocity.z, velocity.x.hypot(velocity.y))
+        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        if sink <= 0.0 {
+            1.0
+        } else if horizontal >= GLIDE_MIN_RATIO * sink {
+            1.0 + glide_gain * (sink / GLIDE_SINK_MPS).min(1.0)
+        } else {
+            dive_share
+        }
     }
 
     /// The finished episode's summary (call when `step` reported an end, before `reset`).

@@ -68,6 +68,8 @@ impl TrainConfig {
             .map_err(|error| TrainConfigError::Task { path: origin.to_owned(), error })?;
         let invalid = |source| TrainConfigError::Invalid { path: origin.to_owned(), source };
         learner.ppo.validate().map_err(invalid)?;
+        let action_names = flapper_sim::ActuatedJoint::ALL.map(|joint| joint.name());
+        learner.ppo.validate_for_actions(&action_names).map_err(invalid)?;
         learner.runner.validate(&learner.ppo).map_err(invalid)?;
         Ok(Self { runner: learner.runner, ppo: learner.ppo, task })
     }
@@ -105,6 +107,7 @@ mod tests {
         let again = TrainConfig::from_toml(&c.to_toml(), "b.toml", None).unwrap();
         assert_eq!(again, c);
         assert!(!c.to_toml().contains("smoothness_norm"), "the default norm is left out of a written config");
+        assert!(!c.to_toml().contains("smoothness_action_scale"), "so are the default shares");
         let euclidean = TrainConfig::from_toml("[ppo]\nsmoothness_norm = \"euclidean\"\n", "e.toml", None).unwrap();
         assert_eq!(euclidean.ppo.smoothness_norm, flapper_ppo::config::SmoothnessNorm::Euclidean);
         assert_eq!(TrainConfig::from_toml(&euclidean.to_toml(), "e2.toml", None).unwrap(), euclidean);
@@ -130,6 +133,15 @@ mod tests {
         assert!(e.contains("sigmoid"), "{e}");
         let e = err("[ppo]\nsmoothness_norm = \"manhattan\"\n");
         assert!(e.contains("bad.toml") && e.contains("manhattan") && e.contains("euclidean"), "{e}");
+        let e = err("[ppo]\nsmoothness_action_scale = [1.0, 0.0, 1.0]\n");
+        assert!(e.contains("bad.toml") && e.contains("smoothness_action_scale") && e.contains("3 shares"), "{e}");
+        assert!(e.contains("flap_left, pitch_left, flap_right, pitch_right, tail_pitch"), "{e}");
+        let e = err("[ppo]\nsmoothness_action_scale = [1.0, -1.0, 1.0, 0.0, 0.0]\n");
+        assert!(e.contains("smoothness_action_scale") && e.contains("-1"), "{e}");
+        let shares = TrainConfig::from_toml("[ppo]\nsmoothness_action_scale = [1, 0, 1, 0, 0.5]\n", "s.toml", None);
+        let shares = shares.unwrap();
+        assert_eq!(shares.ppo.smoothness_action_scale, vec![1.0, 0.0, 1.0, 0.0, 0.5]);
+        assert_eq!(TrainConfig::from_toml(&shares.to_toml(), "s2.toml", None).unwrap(), shares);
         assert!(TrainConfig::from_toml("", "x.toml", Some(7)).unwrap_err().to_string().contains("stage 7"));
     }
 }
