@@ -772,6 +772,14 @@ task = { stage = 2 }
         }
         assert_eq!(slope_only.stages[0].max_iterations, slopes.stages[0].max_iterations);
         check_budget(&slope_stage, "curriculum-glide-slope-stage.toml");
+
+        // gM3: gS's price on the flaps alone, three times as hard; everything else gS's.
+        let flaps = shipped("experiments/curriculum-glide-slope-flaps.toml");
+        let (stage, gs) = (flaps.stage_train_config(1).unwrap(), slope_only.stage_train_config(1).unwrap());
+        assert_eq!(stage.ppo.smoothness_action_scale, [3.0, 0.0, 3.0, 0.0, 0.0]);
+        assert_eq!(flaps.stages[0].max_iterations, 500);
+        let ppo = flapper_ppo::PpoConfig { smoothness_action_scale: Vec::new(), ..stage.ppo.clone() };
+        assert!(ppo == gs.ppo && stage.task == gs.task, "only the shares differ from gS");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
