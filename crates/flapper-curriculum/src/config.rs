@@ -780,6 +780,12 @@ task = { stage = 2 }
         assert_eq!(flaps.stages[0].max_iterations, 500);
         let ppo = flapper_ppo::PpoConfig { smoothness_action_scale: Vec::new(), ..stage.ppo.clone() };
         assert!(ppo == gs.ppo && stage.task == gs.task, "only the shares differ from gS");
+        let flaps_stage = shipped("experiments/curriculum-glide-slope-flaps-stage.toml");
+        let (sixth, gs_sixth) =
+            (flaps_stage.stage_train_config(6).unwrap(), slope_stage.stage_train_config(6).unwrap());
+        assert_eq!(sixth.ppo.smoothness_action_scale, [2.0, 0.0, 2.0, 0.0, 0.0]);
+        assert!(flaps_stage.stages[..5] == slope_stage.stages[..5] && sixth.task == gs_sixth.task);
+        check_budget(&flaps_stage, "curriculum-glide-slope-flaps-stage.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
