@@ -208,9 +208,7 @@ impl PpoConfig {
         }
         Ok(())
     }
-}
 
-impl PpoConfig {
     /// Checks the settings that depend on the environment's actions (`action_names`, in action order).
     pub fn validate_for_actions(&self, action_names: &[&str]) -> Result<(), InvalidSetting> {
         let scales = &self.smoothness_action_scale;
