@@ -417,13 +417,21 @@ mod tests {
 
     /// Central differences, relative error per tensor, as for the MLP.
     fn check(clipped_value_loss: bool, smoothness_coef: f32, weighted: bool) {
-        check_with(clipped_value_loss, smoothness_coef, SmoothnessNorm::Squared, weighted)
+        check_with(clipped_value_loss, smoothness_coef, SmoothnessNorm::Squared, weighted, Vec::new())
     }
 
-    fn check_with(clipped_value_loss: bool, smoothness_coef: f32, norm: SmoothnessNorm, weighted: bool) {
+    /// As `check`, with the smoothness measured by `norm` and each action's share `shares` (empty: all 1).
+    fn check_with(
+        clipped_value_loss: bool,
+        smoothness_coef: f32,
+        norm: SmoothnessNorm,
+        weighted: bool,
+        shares: Vec<f32>,
+    ) {
         let (mut policy, mut config, mut batch) = setup(clipped_value_loss);
         config.smoothness_coef = smoothness_coef;
         config.smoothness_norm = norm;
+        config.smoothness_action_scale = shares;
         if weighted {
             batch.smoothness_weights = (0..batch.size).map(|i| [0.0, 0.3, 1.0][i % 3]).collect();
         }
@@ -484,50 +492,33 @@ mod tests {
         check(false, 0.0, false);
         check(true, 0.7, false);
         check(false, 0.7, true);
-        check_with(true, 0.7, SmoothnessNorm::Euclidean, false);
-        check_with(false, 0.7, SmoothnessNorm::Euclidean, true);
+        check_with(true, 0.7, SmoothnessNorm::Euclidean, false, Vec::new());
+        check_with(false, 0.7, SmoothnessNorm::Euclidean, true, Vec::new());
     }
 
     /// Each action's share scales its gap before the distance is taken, in the loss and its gradient.
     #[test]
     fn the_loss_gradients_match_finite_differences_with_per_action_smoothness_shares() {
         for norm in [SmoothnessNorm::Squared, SmoothnessNorm::Euclidean] {
-            scaled_check(norm, vec![1.0, 0.0, 2.5]);
+            check_with(false, 0.7, norm, false, vec![1.0, 0.0, 2.5]);
         }
     }
 
-    fn scaled_check(norm: SmoothnessNorm, scale: Vec<f32>) {
-        let (policy, mut config, batch) = setup(false);
-        config.smoothness_coef = 0.7;
-        config.smoothness_norm = norm;
-        config.smoothness_action_scale = scale;
-        let mut grads = Gradients::zeros(&policy);
-        loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
-        let bias = policy.actor.tensors().last().expect("an output bias").range.clone();
-        let eps = 2e-3f32;
-        for i in bias {
-            let mut moved = policy.clone();
-            moved.actor.params_mut()[i] += eps;
-            let up = loss(&moved, &config, &batch);
-            moved.actor.params_mut()[i] -= 2.0 * eps;
-            let down = loss(&moved, &config, &batch);
-            let numeric = (up - down) / (2.0 * eps as f64);
-            let analytic = grads.actor[i] as f64;
-            assert!(
-                (numeric - analytic).abs() < 3e-2 * (2e-3 + numeric.abs().max(analytic.abs())),
-                "{norm:?}, output bias {i}: {analytic} analytic, {numeric} numeric"
-            );
-        }
+    /// `setup`'s policy and batch with the smoothness term alone in the loss: no advantage, no entropy,
+    /// the smoothness at coefficient 1.
+    fn smoothness_alone() -> (ActorCritic, PpoConfig, Minibatch) {
+        let (policy, mut config, mut batch) = setup(false);
+        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
+        config.entropy_coef = 0.0;
+        config.smoothness_coef = 1.0;
+        (policy, config, batch)
     }
 
     /// An action whose share is 0 is not pulled at all; the others are pulled as without shares when
     /// the distance is squared (each action's term is its own).
     #[test]
     fn an_action_with_no_smoothness_share_is_not_pulled_towards_its_neighbours() {
-        let (policy, mut config, mut batch) = setup(false);
-        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
-        config.entropy_coef = 0.0;
-        config.smoothness_coef = 1.0;
+        let (policy, mut config, batch) = smoothness_alone();
         let output_bias_gradient = |config: &PpoConfig| {
             let mut grads = Gradients::zeros(&policy);
             loss_and_gradients(&policy, config, &batch, &mut LossScratch::default(), &mut grads, 1);
@@ -546,10 +537,7 @@ mod tests {
     /// is what can make holding the wings still (no flapping cycle) worth more than a small flap.
     #[test]
     fn the_euclidean_smoothness_pulls_as_hard_on_a_small_gap_as_on_a_large_one() {
-        let (policy, mut config, mut batch) = setup(false);
-        batch.advantages.iter_mut().for_each(|a| *a = 0.0);
-        config.entropy_coef = 0.0;
-        config.smoothness_coef = 1.0;
+        let (policy, config, mut batch) = smoothness_alone();
         batch.neighbours.iter_mut().for_each(|n| *n = 1);
         // The size of the gradient on the actor's output bias when every neighbour sits `gap` above the mean.
         let pull = |norm: SmoothnessNorm, gap: f32| {
