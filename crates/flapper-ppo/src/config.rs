@@ -94,6 +94,19 @@ pub struct PpoConfig {
     /// number per action, each in [0, 1000].
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub smoothness_action_scale: Vec<f32>,
+    /// Weight of the temporal curvature of the actor's mean (0 = off): the loss adds this times the
+    /// mean over samples of |mu(s_t) - (mu_old(s_t-1) + mu_old(s_t+1)) / 2|^2, over the samples with
+    /// both neighbours in the same episode and rollout, every action alike and every sample alike (the
+    /// environment's smoothness weights and `smoothness_action_scale` price `smoothness_coef`'s term
+    /// only). A stroke of amplitude A at frequency f costs about A^2 f^4 here where its lift and thrust
+    /// grow about as (A f)^2, and the first difference `smoothness_coef` prices as (A f)^2 too: this is
+    /// the term that prefers the slower, wider stroke. Left out of a written config when 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub curvature_coef: f32,
+}
+
+fn is_zero(value: &f32) -> bool {
+    *value == 0.0
 }
 
 impl Default for PpoConfig {
@@ -120,6 +133,7 @@ impl Default for PpoConfig {
             smoothness_coef: 0.0,
             smoothness_norm: SmoothnessNorm::Squared,
             smoothness_action_scale: Vec::new(),
+            curvature_coef: 0.0,
         }
     }
 }
@@ -183,6 +197,7 @@ impl PpoConfig {
                 not_negative(self.smoothness_coef, 1e3),
                 "must be in [0, 1000]",
             ),
+            ("ppo.curvature_coef", self.curvature_coef, not_negative(self.curvature_coef, 1e3), "must be in [0, 1000]"),
             ("ppo.gamma", self.gamma, not_negative(self.gamma, 1.0), "must be in [0, 1]"),
             ("ppo.lambda", self.lambda, not_negative(self.lambda, 1.0), "must be in [0, 1]"),
         ] {
@@ -225,6 +240,11 @@ impl PpoConfig {
             });
         }
         Ok(())
+    }
+
+    /// Whether the loss needs each sample's neighbours in time (a smoothness or a curvature term).
+    pub fn needs_neighbours(&self) -> bool {
+        self.smoothness_coef > 0.0 || self.curvature_coef > 0.0
     }
 
     /// The share of action `j` in the smoothness distance (1 where `smoothness_action_scale` is empty).

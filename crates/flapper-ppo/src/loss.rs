@@ -92,7 +92,7 @@ pub struct Minibatch {
     pub returns: Vec<f32>,
     /// The collected means of each sample's neighbours in time (the step before and after in the same
     /// episode and rollout), `neighbours[i]` of them from `neighbour_means[i * 2 * action_size]` on.
-    /// Filled only with `smoothness_coef` above 0.
+    /// Filled only when [`PpoConfig::needs_neighbours`].
     pub neighbour_means: Vec<f32>,
     pub neighbours: Vec<u8>,
     /// Each sample's weight of the smoothness term, as the environment gave it
@@ -118,7 +118,11 @@ pub struct LossTerms {
     /// Mean over samples of the squared distance of the actor's mean to its neighbours' collected means,
     /// each sample's distance weighted by its smoothness weight.
     pub smoothness: f64,
-    /// surrogate + value_loss_coef value - entropy_coef entropy + smoothness_coef smoothness.
+    /// Mean over samples of the squared distance of the actor's mean to the midpoint of its two
+    /// neighbours' collected means (0 for a sample without both).
+    pub curvature: f64,
+    /// surrogate + value_loss_coef value - entropy_coef entropy + smoothness_coef smoothness
+    /// + curvature_coef curvature.
     pub total: f64,
 }
 
@@ -205,17 +209,25 @@ pub fn loss_and_gradients(
         terms.kl += sums.kl;
         terms.clip_fraction += sums.clip_fraction;
         terms.smoothness += sums.smoothness;
+        terms.curvature += sums.curvature;
     }
     let n = batch.size as f64;
-    for mean in [&mut terms.surrogate, &mut terms.value, &mut terms.kl, &mut terms.clip_fraction, &mut terms.smoothness]
-    {
+    for mean in [
+        &mut terms.surrogate,
+        &mut terms.value,
+        &mut terms.kl,
+        &mut terms.clip_fraction,
+        &mut terms.smoothness,
+        &mut terms.curvature,
+    ] {
         *mean /= n;
     }
     let log_std_sum: f32 = policy.log_std.iter().sum();
     terms.entropy = (log_std_sum + policy.action_size() as f32 * (0.5 + HALF_LN_2PI)) as f64;
     terms.total = terms.surrogate + config.value_loss_coef as f64 * terms.value
         - config.entropy_coef as f64 * terms.entropy
-        + config.smoothness_coef as f64 * terms.smoothness;
+        + config.smoothness_coef as f64 * terms.smoothness
+        + config.curvature_coef as f64 * terms.curvature;
     terms
 }
 
@@ -302,6 +314,15 @@ fn policy_loss(
                         }
                     }
                 }
+            }
+        }
+        if config.curvature_coef > 0.0 && batch.neighbours[i] == 2 {
+            // The step before and the step after, in that order: mu - (before + after) / 2.
+            let (before, after) = batch.neighbour_means[i * 2 * a_size..(i + 1) * 2 * a_size].split_at(a_size);
+            for j in 0..a_size {
+                let bend = mu[j] - 0.5 * (before[j] + after[j]);
+                terms.curvature += (bend * bend) as f64;
+                d_mean[local * a_size + j] += 2.0 * config.curvature_coef * bend * inv_n;
             }
         }
     }
@@ -428,13 +449,20 @@ mod tests {
         weighted: bool,
         shares: Vec<f32>,
     ) {
-        let (mut policy, mut config, mut batch) = setup(clipped_value_loss);
+        let (policy, mut config, mut batch) = setup(clipped_value_loss);
         config.smoothness_coef = smoothness_coef;
         config.smoothness_norm = norm;
         config.smoothness_action_scale = shares;
         if weighted {
             batch.smoothness_weights = (0..batch.size).map(|i| [0.0, 0.3, 1.0][i % 3]).collect();
         }
+        check_gradients(policy, &config, &batch);
+    }
+
+    /// The analytic gradients of `config`'s loss on `batch` against central differences.
+    fn check_gradients(mut policy: ActorCritic, config: &PpoConfig, batch: &Minibatch) {
+        let clipped_value_loss = config.clipped_value_loss;
+        let (config, batch) = (config.clone(), batch.clone());
         let mut grads = Gradients::zeros(&policy);
         let terms = loss_and_gradients(&policy, &config, &batch, &mut LossScratch::default(), &mut grads, 1);
         assert!(
@@ -502,6 +530,62 @@ mod tests {
         for norm in [SmoothnessNorm::Squared, SmoothnessNorm::Euclidean] {
             check_with(false, 0.7, norm, false, vec![1.0, 0.0, 2.5]);
         }
+    }
+
+    /// The curvature term beside the smoothness, weighted and with shares (which it ignores).
+    #[test]
+    fn the_loss_gradients_match_finite_differences_with_the_curvature_term() {
+        for clipped in [false, true] {
+            let (policy, mut config, mut batch) = setup(clipped);
+            config.curvature_coef = 0.7;
+            check_gradients(policy.clone(), &config, &batch);
+            config.smoothness_coef = 0.3;
+            config.smoothness_action_scale = vec![1.0, 0.0, 2.5];
+            batch.smoothness_weights = (0..batch.size).map(|i| [0.0, 0.3, 1.0][i % 3]).collect();
+            check_gradients(policy, &config, &batch);
+        }
+    }
+
+    /// The curvature prices a fast stroke above a slow one that moves its targets as fast (the same
+    /// first difference, which is all the squared smoothness sees), counts only samples with both
+    /// neighbours, and sits in the total at its coefficient.
+    #[test]
+    fn the_curvature_prices_a_fast_stroke_above_a_slow_one_of_the_same_speed() {
+        let (policy, mut config, mut batch) = smoothness_alone();
+        batch.neighbours.iter_mut().for_each(|n| *n = 2);
+        let means = policy.actor.forward(&batch.observations, batch.size, &mut Workspace::default(), 1).to_vec();
+        // Each mean sits on a sine of amplitude `amplitude` and `cycles` cycles per 50 steps (a 50 Hz policy),
+        // at the phase of its sample; the neighbours are the sine one step before and after.
+        let terms = |amplitude: f32, hz: f32, config: &PpoConfig, batch: &mut Minibatch| {
+            let step = std::f32::consts::TAU * hz / 50.0;
+            for i in 0..batch.size {
+                let phase = i as f32 * 0.37;
+                for j in 0..3 {
+                    let mean = means[i * 3 + j];
+                    let at = |k: f32| amplitude * (phase + k * step).sin();
+                    batch.neighbour_means[i * 6 + j] = mean + at(-1.0) - at(0.0);
+                    batch.neighbour_means[i * 6 + 3 + j] = mean + at(1.0) - at(0.0);
+                }
+            }
+            let mut grads = Gradients::zeros(&policy);
+            loss_and_gradients(&policy, config, batch, &mut LossScratch::default(), &mut grads, 1)
+        };
+        config.value_loss_coef = 0.0;
+        config.curvature_coef = 1.0;
+        // The same amplitude x frequency (the targets' speed), at 4 and at 6 Hz.
+        let slow = terms(0.6, 4.0, &config, &mut batch);
+        let fast = terms(0.4, 6.0, &config, &mut batch);
+        assert!((fast.smoothness / slow.smoothness - 1.0).abs() < 0.1, "{} / {}", fast.smoothness, slow.smoothness);
+        assert!(fast.curvature > 1.8 * slow.curvature, "{} against {}", fast.curvature, slow.curvature);
+        assert!((fast.total - fast.smoothness - fast.curvature).abs() < 1e-9, "{fast:?}");
+        // Without both neighbours a sample has no curvature.
+        batch.neighbours.iter_mut().for_each(|n| *n = 1);
+        assert_eq!(terms(0.4, 6.0, &config, &mut batch).curvature, 0.0);
+        // Off: none, and the total is the smoothness alone.
+        config.curvature_coef = 0.0;
+        batch.neighbours.iter_mut().for_each(|n| *n = 2);
+        let off = terms(0.4, 6.0, &config, &mut batch);
+        assert_eq!((off.curvature, off.total), (0.0, off.smoothness));
     }
 
     /// `setup`'s policy and batch with the smoothness term alone in the loss: no advantage, no entropy,

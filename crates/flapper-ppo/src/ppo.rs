@@ -39,6 +39,8 @@ pub struct UpdateStats {
     pub action_std: f64,
     /// The smoothness term's mean (`smoothness_coef` above 0; None when off).
     pub smoothness: Option<f64>,
+    /// The curvature term's mean (`curvature_coef` above 0; None when off).
+    pub curvature: Option<f64>,
 }
 
 /// How many samples' observations one task of the minibatch gather copies.
@@ -220,7 +222,7 @@ impl Ppo {
         let size = total / self.config.minibatches;
         let mut order: Vec<usize> = (0..total).collect();
         let mut stats = UpdateStats::default();
-        let (mut count, mut smoothness) = (0.0, 0.0);
+        let (mut count, mut smoothness, mut curvature) = (0.0, 0.0, 0.0);
         for _ in 0..self.config.epochs {
             order.shuffle(&mut self.rng);
             for chunk in order.chunks_exact(size) {
@@ -250,6 +252,7 @@ impl Ppo {
                 stats.kl += terms.kl;
                 stats.clip_fraction += terms.clip_fraction;
                 smoothness += terms.smoothness;
+                curvature += terms.curvature;
                 stats.grad_norm += norm as f64;
                 count += 1.0;
             }
@@ -265,6 +268,7 @@ impl Ppo {
             *x /= count;
         }
         stats.smoothness = (self.config.smoothness_coef > 0.0).then_some(smoothness / count);
+        stats.curvature = (self.config.curvature_coef > 0.0).then_some(curvature / count);
         stats.learning_rate = self.learning_rate as f64;
         stats.action_std = self.policy.mean_std() as f64;
         self.storage.clear();
@@ -285,7 +289,7 @@ impl Ppo {
         mb.neighbour_means.clear();
         mb.neighbours.clear();
         mb.smoothness_weights.clear();
-        let smooth = self.config.smoothness_coef > 0.0;
+        let smooth = self.config.needs_neighbours();
         for &i in indices {
             if smooth {
                 let [before, after] = s.neighbours_in_episode(i);

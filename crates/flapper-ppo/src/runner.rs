@@ -129,8 +129,9 @@ impl<E: VecEnv> Trainer<E> {
             diagnostic_names,
             checkpoint_hooks: Vec::new(),
         };
-        let smoothness = trainer.ppo.config.smoothness_coef > 0.0;
-        let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names, smoothness);
+        let config = &trainer.ppo.config;
+        let (smoothness, curvature) = (config.smoothness_coef > 0.0, config.curvature_coef > 0.0);
+        let header = training_log::header(&trainer.end_reasons, &trainer.diagnostic_names, smoothness, curvature);
         training_log::prepare(
             &trainer.csv_path(),
             &header,

@@ -34,9 +34,14 @@ pub struct IterationLog {
 }
 
 /// The CSV header: fixed columns, one `end_<reason>` per episode end, the environment's diagnostics,
-/// the update's statistics (with `smoothness` after them when the run weighs it, so that the logs of
-/// runs without it keep their columns) and the timings.
-pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String], smoothness: bool) -> Vec<String> {
+/// the update's statistics (with `smoothness` and `curvature` after them when the run weighs them, so
+/// that the logs of runs without them keep their columns) and the timings.
+pub(crate) fn header(
+    end_reasons: &[&str],
+    diagnostic_names: &[String],
+    smoothness: bool,
+    curvature: bool,
+) -> Vec<String> {
     let mut h: Vec<String> =
         ["iteration", "env_steps", "wall_time_s", "steps_per_s", "episodes", "mean_return", "mean_length"]
             .map(String::from)
@@ -50,6 +55,9 @@ pub(crate) fn header(end_reasons: &[&str], diagnostic_names: &[String], smoothne
     );
     if smoothness {
         h.push("smoothness".into());
+    }
+    if curvature {
+        h.push("curvature".into());
     }
     h.extend(["env_time_s", "inference_time_s", "update_time_s"].map(String::from));
     h
@@ -76,7 +84,7 @@ struct TrainingRow<'a> {
     #[serde(serialize_with = "each_fixed::<6, _>")]
     diagnostics: &'a [f64],
     /// surrogate loss, value loss, entropy, KL, clip fraction, gradient norm, learning rate, action std
-    /// and, when weighed, smoothness.
+    /// and, when weighed, smoothness and curvature.
     #[serde(serialize_with = "each_fixed::<9, _>")]
     update: Vec<f64>,
     /// environments, inference, update.
@@ -110,6 +118,7 @@ impl<'a> TrainingRow<'a> {
             ]
             .into_iter()
             .chain(u.smoothness)
+            .chain(u.curvature)
             .collect(),
             times_s: [log.env_time_s, log.inference_time_s, log.update_time_s],
         }
@@ -202,6 +211,7 @@ pub fn read_history(path: &Path) -> Result<Vec<IterationLog>, String> {
                 learning_rate: get("learning_rate"),
                 action_std: get("action_std"),
                 smoothness: column("smoothness").map(|_| get("smoothness")),
+                curvature: column("curvature").map(|_| get("curvature")),
             },
             env_time_s: get("env_time_s"),
             inference_time_s: get("inference_time_s"),

@@ -142,6 +142,12 @@ mod tests {
         let shares = shares.unwrap();
         assert_eq!(shares.ppo.smoothness_action_scale, vec![1.0, 0.0, 1.0, 0.0, 0.5]);
         assert_eq!(TrainConfig::from_toml(&shares.to_toml(), "s2.toml", None).unwrap(), shares);
+        let e = err("[ppo]\ncurvature_coef = -0.1\n");
+        assert!(e.contains("bad.toml") && e.contains("ppo.curvature_coef") && e.contains("-0.1"), "{e}");
+        // Written only when on: a config without it writes and reads as before.
+        assert!(!shares.to_toml().contains("curvature_coef"));
+        let bent = TrainConfig::from_toml("[ppo]\ncurvature_coef = 0.1\n", "c.toml", None).unwrap();
+        assert_eq!(TrainConfig::from_toml(&bent.to_toml(), "c2.toml", None).unwrap(), bent);
         assert!(TrainConfig::from_toml("", "x.toml", Some(7)).unwrap_err().to_string().contains("stage 7"));
     }
 }
