@@ -134,6 +134,13 @@ pub struct RewardConfig {
     pub action_rate_weight: f64,
     /// Norm of the step-to-step change of the applied action at which r_action_rate falls to 1/e.
     pub action_rate_scale: f64,
+    /// Weight of r_flap_rate (not the paper's; 0 leaves it out): the price on a flap faster than
+    /// `flap_max_hz`, the frequency read online from the left flap joint's tops.
+    pub flap_rate_weight: f64,
+    /// The fastest flap (Hz) r_flap_rate leaves unpriced: the paper's 4-6 Hz, a little inside its top.
+    pub flap_max_hz: f64,
+    /// How far (Hz) above `flap_max_hz` r_flap_rate falls to 1/e.
+    pub flap_rate_scale_hz: f64,
     /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
     /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
     /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
@@ -354,6 +361,9 @@ impl Default for RewardConfig {
             energy_scale_w: 20.0,
             action_rate_weight: 0.0,
             action_rate_scale: 1.0,
+            flap_rate_weight: 0.0,
+            flap_max_hz: 5.5,
+            flap_rate_scale_hz: 0.5,
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
@@ -560,6 +570,9 @@ impl TaskConfig {
             ("reward.energy_weight", r.energy_weight, 0.0, 1e3),
             ("reward.action_rate_weight", r.action_rate_weight, 0.0, 1e3),
             ("reward.action_rate_scale", r.action_rate_scale, 1e-3, 1e3),
+            ("reward.flap_rate_weight", r.flap_rate_weight, 0.0, 1e3),
+            ("reward.flap_max_hz", r.flap_max_hz, 0.1, 100.0),
+            ("reward.flap_rate_scale_hz", r.flap_rate_scale_hz, 1e-3, 100.0),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
@@ -734,6 +747,8 @@ mod tests {
         assert!(err.contains("control.differential_flap") && err.contains("1.5"), "{err}");
         let err = refused("[reward]\naction_rate_scale = 0.0\n");
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
+        let err = refused("[reward]\nflap_max_hz = 0\n");
+        assert!(err.contains("reward.flap_max_hz") && err.contains("= 0"), "{err}");
         let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = refused("[reward]\nenergy_dive_share = 1.5\n");

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use flapper_sim::{InitialState, ModelError, Quat, RobotModel, Vec3, quat_from_euler, quat_to_euler};
+use flapper_sim::{ActuatedJoint, InitialState, ModelError, Quat, RobotModel, Vec3, quat_from_euler, quat_to_euler};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
 use crate::config::{GLIDE_MIN_RATIO, GLIDE_SINK_MPS, TaskConfig, speed_ramp};
 use crate::control_loop::{ControlLoop, ControlLoopState};
+use crate::flap_rhythm::FlapRhythm;
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
 use crate::reference::Reference;
@@ -87,6 +88,9 @@ pub struct EnvSnapshot {
     /// The flapping oscillator (`flap_oscillator` actions; all 0 in snapshots from before it).
     #[serde(default)]
     oscillator: OscillatorState,
+    /// The flap's rhythm (`reward.flap_rate_weight`; the default in snapshots from before it).
+    #[serde(default)]
+    flap_rhythm: FlapRhythm,
     episode_return: f64,
     term_sums: RewardTerms,
 }
@@ -123,6 +127,8 @@ pub struct FlightEnv {
     previous_action: [f32; ACTION_SIZE],
     /// The flapping oscillator (`flap_oscillator` actions only).
     oscillator: OscillatorState,
+    /// The left flap's frequency as flown, for r_flap_rate.
+    flap_rhythm: FlapRhythm,
     episode_return: f64,
     term_sums: RewardTerms,
     drawn: DrawnDynamics,
@@ -159,6 +165,7 @@ impl FlightEnv {
             time_limit_steps: 0,
             previous_action: [0.0; ACTION_SIZE],
             oscillator: OscillatorState::default(),
+            flap_rhythm: FlapRhythm::default(),
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
             drawn: DrawnDynamics::default(),
@@ -210,6 +217,7 @@ impl FlightEnv {
         self.step = 0;
         self.previous_action = self.actions.at_rest(&initial.joint_positions_rad);
         self.oscillator = self.actions.oscillator_at_rest(&self.previous_action);
+        self.flap_rhythm = FlapRhythm::default();
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
@@ -279,7 +287,10 @@ impl FlightEnv {
         let position = sim.base_position_m();
         let [roll, pitch, _] = quat_to_euler(sim.orientation());
         let error = (self.reference.target(self.step) - position).length();
-        let power = self.control.last_step_work().absolute_j / self.control.control_period_s();
+        let period = self.control.control_period_s();
+        let power = self.control.last_step_work().absolute_j / period;
+        let time = self.step as f64 * period;
+        self.flap_rhythm.update(sim.joint_positions()[ActuatedJoint::FlapLeft.index()], time, period);
         let terms = RewardTerms::evaluate(
             &self.config.reward,
             &RewardInputs {
@@ -289,6 +300,7 @@ impl FlightEnv {
                 pitch_rad: pitch,
                 absolute_power_w: power,
                 action_change,
+                flap_hz: self.flap_rhythm.frequency_hz(time),
             },
         )
         .with_energy_priced(self.energy_price_share());
@@ -331,6 +343,7 @@ impl FlightEnv {
             time_limit_steps: self.time_limit_steps,
             previous_action: self.previous_action,
             oscillator: self.oscillator,
+            flap_rhythm: self.flap_rhythm,
             episode_return: self.episode_return,
             term_sums: self.term_sums,
         }
@@ -358,6 +371,7 @@ impl FlightEnv {
         self.time_limit_steps = snapshot.time_limit_steps;
         self.previous_action = snapshot.previous_action;
         self.oscillator = snapshot.oscillator;
+        self.flap_rhythm = snapshot.flap_rhythm;
         self.episode_return = snapshot.episode_return;
         self.term_sums = snapshot.term_sums;
         Ok(())

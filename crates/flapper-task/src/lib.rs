@@ -7,6 +7,7 @@
 //! - `reference`: procedural, named and CSV reference paths;
 //! - `observation`, `reward`, `termination`, `randomization`: what the policy sees, earns, ends on and
 //!   is trained against;
+//! - `flap_rhythm`: the flap frequency read online, for the price on a fast stroke;
 //! - `env`, `vec_env`: one environment, and N of them stepped in parallel.
 
 pub mod action;
@@ -15,6 +16,7 @@ pub mod benchmark;
 pub mod config;
 mod control_loop;
 pub mod env;
+pub mod flap_rhythm;
 pub mod observation;
 pub mod randomization;
 pub mod reference;

@@ -10,9 +10,12 @@
 //! | r_level | exp(-(roll^2 + pitch^2) / s^2) | s = 0.5 rad |
 //! | r_energy | exp(-P / s), P = mean of sum(abs(torque * joint velocity)) over the step | s = 20 W |
 //! | r_action_rate | exp(-d^2 / s^2), d = norm of the change of the applied action since the last step | s = 1.0 |
+//! | r_flap_rate | exp(-x^2 / s^2), x = how far the flap's frequency is above `flap_max_hz` (0 below) | s = 0.5 Hz |
 //!
 //! r_action_rate is not the paper's: its weight is 0 unless a config sets `action_rate_weight`. It
-//! prices a quick change of what the policy asks (a dither) without pricing a steady flap.
+//! prices a quick change of what the policy asks (a dither) without pricing a steady flap. Nor is
+//! r_flap_rate (weight 0 unless `flap_rate_weight` is set): it prices a stroke faster than a bird's, the
+//! frequency read online from the left flap's tops ([`crate::flap_rhythm`]); a held wing reads 0 Hz.
 
 use crate::config::RewardConfig;
 
@@ -26,6 +29,8 @@ pub struct RewardTerms {
     /// Snapshots written before this term existed read it as 0.
     #[serde(default)]
     pub action_rate: f64,
+    #[serde(default)]
+    pub flap_rate: f64,
 }
 
 /// What the reward looks at after a control step.
@@ -39,6 +44,8 @@ pub struct RewardInputs {
     pub absolute_power_w: f64,
     /// Norm of the change of the applied action (each number in [-1, 1]) since the last step.
     pub action_change: f64,
+    /// The flap's frequency (Hz) as [`crate::flap_rhythm::FlapRhythm`] reads it (0 for a held wing).
+    pub flap_hz: f64,
 }
 
 impl RewardTerms {
@@ -50,6 +57,7 @@ impl RewardTerms {
             level: gaussian(x.roll_rad.hypot(x.pitch_rad), config.level_scale_rad),
             energy: (-x.absolute_power_w.max(0.0) / config.energy_scale_w).exp(),
             action_rate: gaussian(x.action_change, config.action_rate_scale),
+            flap_rate: gaussian((x.flap_hz - config.flap_max_hz).max(0.0), config.flap_rate_scale_hz),
         }
     }
 
@@ -69,6 +77,7 @@ impl RewardTerms {
             + config.level_weight * self.level
             + config.energy_weight * self.energy
             + config.action_rate_weight * self.action_rate
+            + config.flap_rate_weight * self.flap_rate
     }
 
     pub fn add(&mut self, other: &Self) {
@@ -77,6 +86,7 @@ impl RewardTerms {
         self.level += other.level;
         self.energy += other.energy;
         self.action_rate += other.action_rate;
+        self.flap_rate += other.flap_rate;
     }
 }
 
@@ -86,7 +96,8 @@ mod tests {
 
     #[test]
     fn the_energy_priced_in_part_moves_its_kernel_towards_the_top_and_leaves_the_other_terms() {
-        let terms = RewardTerms { position: 0.9, body_rate: 0.8, level: 0.7, energy: 0.2, action_rate: 0.6 };
+        let terms =
+            RewardTerms { position: 0.9, body_rate: 0.8, level: 0.7, energy: 0.2, action_rate: 0.6, flap_rate: 0.5 };
         assert_eq!(terms.with_energy_priced(1.0), terms, "in full: unchanged, bit for bit");
         assert_eq!(terms.with_energy_priced(0.0), RewardTerms { energy: 1.0, ..terms }, "waived: the top");
         assert!((terms.with_energy_priced(0.5).energy - 0.6).abs() < 1e-12, "half the price: halfway up");
@@ -101,6 +112,7 @@ mod tests {
             pitch_rad: 0.0,
             absolute_power_w: 0.0,
             action_change: 0.0,
+            flap_hz: 5.0,
         }
     }
 
@@ -108,7 +120,9 @@ mod tests {
     fn ideal_flight_earns_the_sum_of_the_weights() {
         let c = RewardConfig::default();
         let terms = RewardTerms::evaluate(&c, &ideal());
-        assert_eq!(terms, RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0 });
+        let ones =
+            RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0, flap_rate: 1.0 };
+        assert_eq!(terms, ones);
         assert!((terms.total(&c) - 0.85).abs() < 1e-12);
     }
 
@@ -129,6 +143,23 @@ mod tests {
         // At the scale the kernel is 1/e.
         let at_scale = RewardTerms::evaluate(&c, &RewardInputs { action_change: c.action_rate_scale, ..ideal() });
         assert!((at_scale.action_rate - (-1f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_flap_rate_term_prices_only_a_stroke_faster_than_its_bar_and_only_with_its_weight() {
+        let mut c = RewardConfig::default();
+        let at = |c: &RewardConfig, hz: f64| RewardTerms::evaluate(c, &RewardInputs { flap_hz: hz, ..ideal() });
+        // Off by default: the paper's reward at any frequency.
+        assert_eq!(at(&c, 7.0).total(&c), at(&c, 5.0).total(&c));
+        c.flap_rate_weight = 0.1;
+        c.flap_max_hz = 5.5;
+        for hz in [0.0, 4.0, 5.5] {
+            assert_eq!(at(&c, hz).flap_rate, 1.0, "{hz} Hz is within the bar");
+        }
+        let above = |hz: f64| at(&c, hz).flap_rate;
+        assert!((above(5.5 + c.flap_rate_scale_hz) - (-1f64).exp()).abs() < 1e-12);
+        assert!(above(6.0) > above(6.25) && above(6.25) > above(6.5), "falls with the excess");
+        assert!((at(&c, 5.0).total(&c) - at(&c, 6.0).total(&c) - 0.1 * (1.0 - above(6.0))).abs() < 1e-12);
     }
 
     #[test]

@@ -126,6 +126,42 @@ fn the_action_rate_term_reads_the_change_of_the_applied_action_and_joins_the_rew
 }
 
 #[test]
+fn the_flap_rate_term_prices_the_flown_stroke_above_its_bar_and_joins_the_reward_only_when_weighted() {
+    let env = |weight: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.flap_rate_weight = weight;
+        config.reward.flap_max_hz = 5.5;
+        FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap()
+    };
+    // Both flaps driven as a sine of `hz` for 0.6 s (before the unsteered robot tumbles); the last
+    // step's kernel.
+    let fly = |hz: f64| {
+        let (mut plain, mut weighted) = (env(0.0), env(0.5));
+        let mut last = None;
+        for k in 0..30 {
+            let flap = (0.8 * (std::f64::consts::TAU * hz * k as f64 * 0.02).sin()) as f32;
+            let action = [flap, 0.0, flap, 0.0, -0.2];
+            let (p, w) = (plain.step(&action), weighted.step(&action));
+            assert!(p.end.is_none(), "{hz} Hz: ended at step {k}");
+            // The same flight and kernels: the weight changes the reward, not the physics.
+            assert_eq!((p.position_error_m, p.terms), (w.position_error_m, w.terms), "{hz} Hz");
+            assert!((w.reward - p.reward - 0.5 * w.terms.flap_rate).abs() < 1e-12, "{hz} Hz");
+            last = Some(w.terms.flap_rate);
+        }
+        last.unwrap()
+    };
+    assert_eq!(fly(4.0), 1.0, "a 4 Hz stroke is within the bar");
+    let fast = fly(7.0);
+    // 1.5 Hz above the bar at a 0.5 Hz scale: exp(-9), read from the joint's own tops.
+    assert!(fast < 1e-3, "a 7 Hz stroke reads {fast}");
+    // Held wings: no stroke, the kernel's top.
+    let mut held = env(0.5);
+    for _ in 0..40 {
+        assert_eq!(held.step(&[0.0, 0.0, 0.0, 0.0, -0.2]).terms.flap_rate, 1.0);
+    }
+}
+
+#[test]
 fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();

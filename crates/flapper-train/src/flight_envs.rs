@@ -13,6 +13,9 @@ pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level"
 /// above 0), so that the logs of runs without it keep their columns and resume as they were written.
 pub const ACTION_RATE_TERM_NAME: &str = "r_action_rate";
 
+/// The diagnostic logged last when the task weighs it (`reward.flap_rate_weight` above 0), likewise.
+pub const FLAP_RATE_TERM_NAME: &str = "r_flap_rate";
+
 /// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
 const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
 
@@ -40,6 +43,7 @@ pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
     logs_action_rate: bool,
+    logs_flap_rate: bool,
     /// `reward.smoothness_turn_scale_degps` above 0: the learner's smoothness term is weighted per step.
     weighs_smoothness: bool,
 }
@@ -55,18 +59,19 @@ impl FlightEnvs {
         threads: usize,
     ) -> Result<Self, ModelError> {
         let logs_action_rate = task.reward.action_rate_weight > 0.0;
+        let logs_flap_rate = task.reward.flap_rate_weight > 0.0;
         let weighs_smoothness = task.reward.weighs_smoothness();
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
-        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate, weighs_smoothness };
+        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate, logs_flap_rate, weighs_smoothness };
         envs.diagnostics = vec![0.0; count * envs.logged_terms()];
         Ok(envs)
     }
 
     /// How many reward kernels each environment logs: the four of [`REWARD_TERM_NAMES`], and
-    /// [`ACTION_RATE_TERM_NAME`] when weighed.
+    /// [`ACTION_RATE_TERM_NAME`] and [`FLAP_RATE_TERM_NAME`] when weighed.
     fn logged_terms(&self) -> usize {
-        REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate)
+        REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate) + usize::from(self.logs_flap_rate)
     }
 
     pub fn inner(&self) -> &FlightVecEnv {
@@ -93,8 +98,10 @@ impl VecEnv for FlightEnvs {
         self.inner.step(actions)?;
         let per_env = self.logged_terms();
         for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
-            let all = [t.position, t.body_rate, t.level, t.energy, t.action_rate];
-            for (o, value) in out.iter_mut().zip(all) {
+            let weighed = [(true, t.position), (true, t.body_rate), (true, t.level), (true, t.energy)]
+                .into_iter()
+                .chain([(self.logs_action_rate, t.action_rate), (self.logs_flap_rate, t.flap_rate)]);
+            for (o, (_, value)) in out.iter_mut().zip(weighed.filter(|(logged, _)| *logged)) {
                 *o = value as f32;
             }
         }
@@ -134,7 +141,8 @@ impl VecEnv for FlightEnvs {
     }
 
     fn diagnostic_names(&self) -> Vec<String> {
-        let extra = self.logs_action_rate.then_some(ACTION_RATE_TERM_NAME);
+        let extra = [(self.logs_action_rate, ACTION_RATE_TERM_NAME), (self.logs_flap_rate, FLAP_RATE_TERM_NAME)];
+        let extra = extra.into_iter().filter(|(logged, _)| *logged).map(|(_, name)| name);
         REWARD_TERM_NAMES.iter().copied().chain(extra).map(str::to_string).collect()
     }
 

@@ -1,0 +1,138 @@
+//! The flap's rhythm as the robot flies it: the frequency of the left flap joint, read online from the
+//! times of its tops (the maxima of its angle), for the reward's price on a fast stroke
+//! (`reward.flap_rate_weight`).
+//!
+//! A top counts once the angle has fallen [`FLAP_REVERSAL_RAD`] below it after rising as much from the
+//! bottom before it, so that a tremor of the joint is not a stroke. Its time is refined between control
+//! steps by the parabola through the three samples around it (a 6.1 Hz stroke is 8.2 steps of 50 Hz; whole
+//! steps would read it as 6.25 or 5.56 Hz). The frequency is one over the time between the last two tops
+//! while the wing keeps turning (a top or a bottom within that time), else one over the time since the last
+//! top: it falls towards 0 in a glide, and reads 0 until two tops have been seen.
+
+use serde::{Deserialize, Serialize};
+
+/// How far (rad) the flap must turn back from a top or a bottom for it to count: 5 deg.
+pub const FLAP_REVERSAL_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
+/// The detector's state, carried across control steps (and in environment snapshots).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct FlapRhythm {
+    /// The previous sample (rad); `started` once there is one.
+    last_rad: f64,
+    started: bool,
+    /// Rising towards a top (true) or falling towards a bottom (false).
+    rising: bool,
+    /// The highest (rising) or lowest (falling) angle since the last turn, its time (s), and the samples
+    /// just before and just after it (the one after, once taken), for the parabola.
+    extreme_rad: f64,
+    extreme_s: f64,
+    before_extreme_rad: f64,
+    after_extreme_rad: Option<f64>,
+    /// The refined times of the last two tops (s), and how many have been seen (at most 2 counted).
+    tops_s: [f64; 2],
+    tops: u8,
+    /// The refined time of the last top or bottom (s).
+    turn_s: f64,
+}
+
+impl FlapRhythm {
+    /// Takes the angle `angle_rad` at time `time_s` (one call per control step, `period_s` apart).
+    pub fn update(&mut self, angle_rad: f64, time_s: f64, period_s: f64) {
+        let previous = std::mem::replace(&mut self.last_rad, angle_rad);
+        if !self.started {
+            self.started = true;
+            self.rising = true;
+            self.set_extreme(angle_rad, time_s, angle_rad);
+            return;
+        }
+        let beyond = if self.rising { angle_rad > self.extreme_rad } else { angle_rad < self.extreme_rad };
+        if beyond {
+            self.set_extreme(angle_rad, time_s, previous);
+            return;
+        }
+        self.after_extreme_rad.get_or_insert(angle_rad);
+        if (angle_rad - self.extreme_rad).abs() < FLAP_REVERSAL_RAD {
+            return;
+        }
+        self.turn_s = self.refined_extreme_s(period_s);
+        if self.rising {
+            self.tops_s = [self.tops_s[1], self.turn_s];
+            self.tops = (self.tops + 1).min(2);
+        }
+        self.rising = !self.rising;
+        self.set_extreme(angle_rad, time_s, previous);
+    }
+
+    fn set_extreme(&mut self, angle_rad: f64, time_s: f64, before_rad: f64) {
+        (self.extreme_rad, self.extreme_s, self.before_extreme_rad) = (angle_rad, time_s, before_rad);
+        self.after_extreme_rad = None;
+    }
+
+    /// The time of the extreme just confirmed: the vertex of the parabola through it and its two
+    /// neighbouring samples, within half a step of its own sample.
+    fn refined_extreme_s(&self, period_s: f64) -> f64 {
+        let (before, extreme) = (self.before_extreme_rad, self.extreme_rad);
+        let after = self.after_extreme_rad.unwrap_or(extreme);
+        let bend = before - 2.0 * extreme + after;
+        if bend.abs() < 1e-12 {
+            return self.extreme_s;
+        }
+        self.extreme_s + (0.5 * (before - after) / bend).clamp(-0.5, 0.5) * period_s
+    }
+
+    /// The stroke's frequency (Hz) at time `time_s`; 0 until two tops have been seen.
+    pub fn frequency_hz(&self, time_s: f64) -> f64 {
+        if self.tops < 2 {
+            return 0.0;
+        }
+        let period = self.tops_s[1] - self.tops_s[0];
+        let period = if time_s - self.turn_s <= period { period } else { time_s - self.tops_s[1] };
+        if period > 0.0 { 1.0 / period } else { 0.0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PERIOD_S: f64 = 0.02;
+
+    /// Feeds `angle(t)` for `steps` control steps and returns the detector and the last time.
+    fn fed(steps: usize, angle: impl Fn(f64) -> f64) -> (FlapRhythm, f64) {
+        let mut rhythm = FlapRhythm::default();
+        let mut time = 0.0;
+        for k in 0..steps {
+            time = k as f64 * PERIOD_S;
+            rhythm.update(angle(time), time, PERIOD_S);
+        }
+        (rhythm, time)
+    }
+
+    #[test]
+    fn a_steady_stroke_reads_its_frequency_between_whole_steps() {
+        for hz in [4.0, 5.3, 6.1, 6.5, 8.0] {
+            // At every step from the third stroke on, not only at the end.
+            for steps in 50..200 {
+                let (rhythm, time) = fed(steps, |t| 0.5 * (std::f64::consts::TAU * hz * t + 0.3).sin() + 0.1);
+                let read = rhythm.frequency_hz(time);
+                assert!((read - hz).abs() < 0.06, "{hz} Hz read as {read} after {steps} steps");
+            }
+        }
+    }
+
+    #[test]
+    fn a_held_wing_and_a_tremor_read_no_stroke_and_a_stop_decays_the_frequency() {
+        let (held, time) = fed(100, |_| 0.2);
+        assert_eq!(held.frequency_hz(time), 0.0);
+        // 2 deg of tremor at 10 Hz: under the reversal that counts.
+        let (tremor, time) = fed(100, |t| 0.035 * (std::f64::consts::TAU * 10.0 * t).sin());
+        assert_eq!(tremor.frequency_hz(time), 0.0);
+        // A 6 Hz stroke for 1 s, then the wing held: after the last top the reading falls as 1 / time.
+        let stroke = |t: f64| if t < 1.0 { 0.5 * (std::f64::consts::TAU * 6.0 * t).sin() } else { 0.0 };
+        let (stopped, _) = fed(100, stroke);
+        let at_stop = stopped.frequency_hz(1.0);
+        assert!((at_stop - 6.0).abs() < 0.1, "{at_stop}");
+        let later = stopped.frequency_hz(2.0);
+        assert!(later < 1.2 && later > 0.5, "1 s after the stop: {later}");
+    }
+}
