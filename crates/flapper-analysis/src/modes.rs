@@ -26,8 +26,9 @@ pub const SEGMENTS: [(&str, f64, f64); 4] =
 pub const GLIDE_SEGMENT: usize = 2;
 /// A moment counts as gliding when the flap angle moves less than this, peak to peak, over the
 /// [`GLIDE_WINDOW_S`] centred on it: the wings are held, no flapping cycle runs. (The cruise gait
-/// flaps about 100 deg peak to peak.)
-pub const GLIDE_MAX_FLAP_RANGE_DEG: f64 = 10.0;
+/// flaps about 100 deg peak to peak.) The same range below which the reward's stroke detector
+/// (`flapper_task::flap_rhythm`) reads no stroke, so a wing held by this measure pays no flap price.
+pub const GLIDE_MAX_FLAP_RANGE_DEG: f64 = flapper_task::flap_rhythm::HELD_FLAP_RANGE_DEG;
 /// Two cycles of the cruise gait's 5 Hz flapping: long enough that a flapping wing always moves
 /// through its range within it.
 pub const GLIDE_WINDOW_S: f64 = 0.4;

@@ -2,8 +2,9 @@
 //! times of its tops (the maxima of its angle), for the reward's price on a fast stroke
 //! (`reward.flap_rate_weight`).
 //!
-//! A top counts once the angle has fallen [`FLAP_REVERSAL_RAD`] below it after rising as much from the
-//! bottom before it, so that a tremor of the joint is not a stroke. Its time is refined between control
+//! A top counts once the angle has fallen [`HELD_FLAP_RANGE_DEG`] below it after rising as much from the
+//! bottom before it: a wing that moves less than that, peak to peak, is held (gliding) by the same
+//! measure that `flapper modes` reads the glide with, and pays no price for its wobble. Its time is refined between control
 //! steps by the parabola through the three samples around it (a 6.1 Hz stroke is 8.2 steps of 50 Hz; whole
 //! steps would read it as 6.25 or 5.56 Hz). The frequency is one over the time between the last two tops
 //! while the wing keeps turning (a top or a bottom within that time), else one over the time since the last
@@ -11,8 +12,12 @@
 
 use serde::{Deserialize, Serialize};
 
-/// How far (rad) the flap must turn back from a top or a bottom for it to count: 5 deg.
-pub const FLAP_REVERSAL_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+/// The flap's peak-to-peak range (deg) below which the wing counts as held, not flapping: the stroke
+/// detector's reversal here, and the glide's measure in `flapper modes` (`flapper_analysis::modes`).
+pub const HELD_FLAP_RANGE_DEG: f64 = 10.0;
+
+/// How far (rad) the flap must turn back from a top or a bottom for it to count as a stroke.
+const FLAP_REVERSAL_RAD: f64 = HELD_FLAP_RANGE_DEG * std::f64::consts::PI / 180.0;
 
 /// The detector's state, carried across control steps (and in environment snapshots).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -124,8 +129,9 @@ mod tests {
     fn a_held_wing_and_a_tremor_read_no_stroke_and_a_stop_decays_the_frequency() {
         let (held, time) = fed(100, |_| 0.2);
         assert_eq!(held.frequency_hz(time), 0.0);
-        // 2 deg of tremor at 10 Hz: under the reversal that counts.
-        let (tremor, time) = fed(100, |t| 0.035 * (std::f64::consts::TAU * 10.0 * t).sin());
+        // 9 deg peak to peak at 10 Hz: a held wing's wobble, under the reversal that counts.
+        let wobble = 0.5 * (HELD_FLAP_RANGE_DEG - 1.0).to_radians();
+        let (tremor, time) = fed(100, |t| wobble * (std::f64::consts::TAU * 10.0 * t).sin());
         assert_eq!(tremor.frequency_hz(time), 0.0);
         // A 6 Hz stroke for 1 s, then the wing held: after the last top the reading falls as 1 / time.
         let stroke = |t: f64| if t < 1.0 { 0.5 * (std::f64::consts::TAU * 6.0 * t).sin() } else { 0.0 };
