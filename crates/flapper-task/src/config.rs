@@ -135,11 +135,16 @@ pub struct RewardConfig {
     /// Norm of the step-to-step change of the applied action at which r_action_rate falls to 1/e.
     pub action_rate_scale: f64,
     /// Weight of r_flap_rate (not the paper's; 0 leaves it out): the price on a flap faster than
-    /// `flap_max_hz`, the frequency read online from the left flap joint's tops.
+    /// `flap_max_hz`, the frequency read online from the left flap joint's tops. The three flap keys
+    /// are left out of a written config at their defaults, so configs written before them read and
+    /// write the same.
+    #[serde(skip_serializing_if = "is_default_flap_rate_weight")]
     pub flap_rate_weight: f64,
     /// The fastest flap (Hz) r_flap_rate leaves unpriced: the paper's 4-6 Hz, a little inside its top.
+    #[serde(skip_serializing_if = "is_default_flap_max_hz")]
     pub flap_max_hz: f64,
     /// How far (Hz) above `flap_max_hz` r_flap_rate falls to 1/e.
+    #[serde(skip_serializing_if = "is_default_flap_rate_scale_hz")]
     pub flap_rate_scale_hz: f64,
     /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
     /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
@@ -176,6 +181,18 @@ pub struct RewardConfig {
     /// (sinking faster than horizontal speed / [`GLIDE_MIN_RATIO`]), where the robot must flap to brake
     /// and hold the path: 1 prices it as everywhere, 0 not at all (r_energy reads 1 there).
     pub energy_dive_share: f64,
+}
+
+fn is_default_flap_rate_weight(value: &f64) -> bool {
+    *value == RewardConfig::default().flap_rate_weight
+}
+
+fn is_default_flap_max_hz(value: &f64) -> bool {
+    *value == RewardConfig::default().flap_max_hz
+}
+
+fn is_default_flap_rate_scale_hz(value: &f64) -> bool {
+    *value == RewardConfig::default().flap_rate_scale_hz
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,

@@ -89,7 +89,7 @@ pub struct EnvSnapshot {
     #[serde(default)]
     oscillator: OscillatorState,
     /// The flap's rhythm (`reward.flap_rate_weight`; the default in snapshots from before it).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "FlapRhythm::is_unused")]
     flap_rhythm: FlapRhythm,
     episode_return: f64,
     term_sums: RewardTerms,
@@ -127,7 +127,7 @@ pub struct FlightEnv {
     previous_action: [f32; ACTION_SIZE],
     /// The flapping oscillator (`flap_oscillator` actions only).
     oscillator: OscillatorState,
-    /// The left flap's frequency as flown, for r_flap_rate.
+    /// The left flap's frequency as flown, for r_flap_rate (read only when it is weighed).
     flap_rhythm: FlapRhythm,
     episode_return: f64,
     term_sums: RewardTerms,
@@ -290,7 +290,9 @@ impl FlightEnv {
         let period = self.control.control_period_s();
         let power = self.control.last_step_work().absolute_j / period;
         let time = self.step as f64 * period;
-        self.flap_rhythm.update(sim.joint_positions()[ActuatedJoint::FlapLeft.index()], time, period);
+        if self.config.reward.flap_rate_weight > 0.0 {
+            self.flap_rhythm.update(sim.joint_positions()[ActuatedJoint::FlapLeft.index()], time, period);
+        }
         let terms = RewardTerms::evaluate(
             &self.config.reward,
             &RewardInputs {

@@ -19,7 +19,8 @@ pub const HELD_FLAP_RANGE_DEG: f64 = 10.0;
 /// How far (rad) the flap must turn back from a top or a bottom for it to count as a stroke.
 const FLAP_REVERSAL_RAD: f64 = HELD_FLAP_RANGE_DEG * std::f64::consts::PI / 180.0;
 
-/// The detector's state, carried across control steps (and in environment snapshots).
+/// The detector's state, carried across control steps (and in environment snapshots; it stays at its
+/// default, which snapshots leave out, when the task does not weigh r_flap_rate).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct FlapRhythm {
     /// The previous sample (rad); `started` once there is one.
@@ -41,6 +42,11 @@ pub struct FlapRhythm {
 }
 
 impl FlapRhythm {
+    /// Nothing seen yet.
+    pub fn is_unused(&self) -> bool {
+        *self == Self::default()
+    }
+
     /// Takes the angle `angle_rad` at time `time_s` (one call per control step, `period_s` apart).
     pub fn update(&mut self, angle_rad: f64, time_s: f64, period_s: f64) {
         let previous = std::mem::replace(&mut self.last_rad, angle_rad);

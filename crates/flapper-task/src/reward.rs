@@ -29,8 +29,14 @@ pub struct RewardTerms {
     /// Snapshots written before this term existed read it as 0.
     #[serde(default)]
     pub action_rate: f64,
-    #[serde(default)]
+    /// 0 unless weighed (`reward.flap_rate_weight`), and then left out of snapshots, so that the records
+    /// of runs without it (checkpoints' environment states) stay byte for byte as before it.
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub flap_rate: f64,
+}
+
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
 }
 
 /// What the reward looks at after a control step.
@@ -57,7 +63,11 @@ impl RewardTerms {
             level: gaussian(x.roll_rad.hypot(x.pitch_rad), config.level_scale_rad),
             energy: (-x.absolute_power_w.max(0.0) / config.energy_scale_w).exp(),
             action_rate: gaussian(x.action_change, config.action_rate_scale),
-            flap_rate: gaussian((x.flap_hz - config.flap_max_hz).max(0.0), config.flap_rate_scale_hz),
+            flap_rate: if config.flap_rate_weight > 0.0 {
+                gaussian((x.flap_hz - config.flap_max_hz).max(0.0), config.flap_rate_scale_hz)
+            } else {
+                0.0
+            },
         }
     }
 
@@ -121,8 +131,8 @@ mod tests {
         let c = RewardConfig::default();
         let terms = RewardTerms::evaluate(&c, &ideal());
         let ones =
-            RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0, flap_rate: 1.0 };
-        assert_eq!(terms, ones);
+            RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0, flap_rate: 0.0 };
+        assert_eq!(terms, ones, "r_flap_rate reads 0 unless weighed");
         assert!((terms.total(&c) - 0.85).abs() < 1e-12);
     }
 
@@ -149,8 +159,9 @@ mod tests {
     fn the_flap_rate_term_prices_only_a_stroke_faster_than_its_bar_and_only_with_its_weight() {
         let mut c = RewardConfig::default();
         let at = |c: &RewardConfig, hz: f64| RewardTerms::evaluate(c, &RewardInputs { flap_hz: hz, ..ideal() });
-        // Off by default: the paper's reward at any frequency.
+        // Off by default: the paper's reward at any frequency, and no kernel.
         assert_eq!(at(&c, 7.0).total(&c), at(&c, 5.0).total(&c));
+        assert_eq!(at(&c, 7.0).flap_rate, 0.0);
         c.flap_rate_weight = 0.1;
         c.flap_max_hz = 5.5;
         for hz in [0.0, 4.0, 5.5] {

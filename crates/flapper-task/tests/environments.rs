@@ -143,8 +143,10 @@ fn the_flap_rate_term_prices_the_flown_stroke_above_its_bar_and_joins_the_reward
             let action = [flap, 0.0, flap, 0.0, -0.2];
             let (p, w) = (plain.step(&action), weighted.step(&action));
             assert!(p.end.is_none(), "{hz} Hz: ended at step {k}");
-            // The same flight and kernels: the weight changes the reward, not the physics.
-            assert_eq!((p.position_error_m, p.terms), (w.position_error_m, w.terms), "{hz} Hz");
+            // The same flight and the other kernels: the weight changes the reward, not the physics;
+            // unweighed, the kernel reads 0.
+            let unweighed = flapper_task::reward::RewardTerms { flap_rate: 0.0, ..w.terms };
+            assert_eq!((p.position_error_m, p.terms), (w.position_error_m, unweighed), "{hz} Hz");
             assert!((w.reward - p.reward - 0.5 * w.terms.flap_rate).abs() < 1e-12, "{hz} Hz");
             last = Some(w.terms.flap_rate);
         }
