@@ -146,6 +146,11 @@ pub struct RewardConfig {
     /// How far (Hz) above `flap_max_hz` r_flap_rate falls to 1/e.
     #[serde(skip_serializing_if = "is_default_flap_rate_scale_hz")]
     pub flap_rate_scale_hz: f64,
+    /// The share of r_flap_rate's price paid where the reference sinks at a glide slope (the slopes of
+    /// `smoothness_glide_gain`, in full from a sink rate of [`GLIDE_SINK_MPS`]): 1 prices a fast stroke
+    /// there as everywhere, 0 leaves the glide slopes to the glide's own prices.
+    #[serde(skip_serializing_if = "is_default_flap_rate_glide_share")]
+    pub flap_rate_glide_share: f64,
     /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
     /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
     /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
@@ -193,6 +198,10 @@ fn is_default_flap_max_hz(value: &f64) -> bool {
 
 fn is_default_flap_rate_scale_hz(value: &f64) -> bool {
     *value == RewardConfig::default().flap_rate_scale_hz
+}
+
+fn is_default_flap_rate_glide_share(value: &f64) -> bool {
+    *value == RewardConfig::default().flap_rate_glide_share
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
@@ -381,6 +390,7 @@ impl Default for RewardConfig {
             flap_rate_weight: 0.0,
             flap_max_hz: 5.5,
             flap_rate_scale_hz: 0.5,
+            flap_rate_glide_share: 1.0,
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
@@ -590,6 +600,7 @@ impl TaskConfig {
             ("reward.flap_rate_weight", r.flap_rate_weight, 0.0, 1e3),
             ("reward.flap_max_hz", r.flap_max_hz, 0.1, 100.0),
             ("reward.flap_rate_scale_hz", r.flap_rate_scale_hz, 1e-3, 100.0),
+            ("reward.flap_rate_glide_share", r.flap_rate_glide_share, 0.0, 1.0),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
@@ -764,6 +775,8 @@ mod tests {
         assert!(err.contains("control.differential_flap") && err.contains("1.5"), "{err}");
         let err = refused("[reward]\naction_rate_scale = 0.0\n");
         assert!(err.contains("reward.action_rate_scale") && err.contains("= 0"), "{err}");
+        let err = refused("[reward]\nflap_rate_glide_share = 2\n");
+        assert!(err.contains("reward.flap_rate_glide_share") && err.contains("= 2"), "{err}");
         let err = refused("[reward]\nflap_max_hz = 0\n");
         assert!(err.contains("reward.flap_max_hz") && err.contains("= 0"), "{err}");
         let err = refused("[reward]\naction_rate_weight = -1\n");

@@ -305,7 +305,8 @@ impl FlightEnv {
                 flap_hz: self.flap_rhythm.frequency_hz(time),
             },
         )
-        .with_energy_priced(self.energy_price_share());
+        .with_energy_priced(self.energy_price_share())
+        .with_flap_rate_priced(self.flap_rate_price_share());
         let end = if fault.is_some() {
             Some(EpisodeEnd::SimulationFault)
         } else if let Some(failure) = check_failure(&self.config.episode, error, roll, pitch) {
@@ -410,6 +411,13 @@ impl FlightEnv {
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         weight *= self.slope_factor(reward.smoothness_glide_gain, reward.smoothness_dive_share);
         weight as f32
+    }
+
+    /// The share of r_flap_rate's price paid at the current step: `reward.flap_rate_glide_share` on a
+    /// glide slope (from 1 on a level path, as [`Self::slope_factor`] rises), 1 elsewhere.
+    pub fn flap_rate_price_share(&self) -> f64 {
+        let share = self.config.reward.flap_rate_glide_share;
+        if share == 1.0 { 1.0 } else { self.slope_factor(share - 1.0, 1.0) }
     }
 
     /// A reward term's factor for the slope the reference flies at the current step: 1 +

@@ -80,6 +80,16 @@ impl RewardTerms {
         if share == 1.0 { self } else { Self { energy: 1.0 - share.max(0.0) * (1.0 - self.energy), ..self } }
     }
 
+    /// The flap's price paid in part: r_flap_rate = 1 - share (1 - k), k the kernel's value (`share` 1
+    /// leaves it as it is, bit for bit; 0 reads its top, 1, whatever the frequency). Unweighed (0) stays 0.
+    pub fn with_flap_rate_priced(self, share: f64) -> Self {
+        if share == 1.0 || self.flap_rate == 0.0 {
+            self
+        } else {
+            Self { flap_rate: 1.0 - share.max(0.0) * (1.0 - self.flap_rate), ..self }
+        }
+    }
+
     /// The weighted sum.
     pub fn total(&self, config: &RewardConfig) -> f64 {
         config.position_weight * self.position

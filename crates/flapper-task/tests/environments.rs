@@ -573,6 +573,31 @@ fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climb
 }
 
 #[test]
+fn the_flap_price_on_glide_slopes_is_its_share_and_full_on_level_paths_climbs_and_dives() {
+    let first_share = |reference: Arc<Reference>, share: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.flap_rate_weight = 0.1;
+        config.reward.flap_rate_glide_share = share;
+        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        env.flap_rate_price_share()
+    };
+    assert_eq!(first_share(sloped(-0.83), 1.0), 1.0, "by default: in full on every slope");
+    assert!(first_share(sloped(-0.83), 0.0).abs() < 1e-4, "a glide slope: free");
+    assert!((first_share(sloped(-0.83), 0.3) - 0.3).abs() < 1e-4, "a glide slope: the share");
+    assert!((first_share(sloped(-0.25), 0.0) - 0.5).abs() < 1e-4, "half the full sink: halfway");
+    for (vertical, what) in [(0.0, "level"), (0.8, "a climb"), (-1.5, "longitudinal's dive")] {
+        assert!((first_share(sloped(vertical), 0.0) - 1.0).abs() < 1e-6, "{what}: in full");
+    }
+    // The kernel priced in part: 1 - share (1 - k), bit for bit at 1, and an unweighed 0 stays 0.
+    let terms = flapper_task::reward::RewardTerms { flap_rate: 0.2, ..Default::default() };
+    assert_eq!(terms.with_flap_rate_priced(1.0), terms);
+    assert!((terms.with_flap_rate_priced(0.5).flap_rate - 0.6).abs() < 1e-12);
+    assert_eq!(terms.with_flap_rate_priced(0.0).flap_rate, 1.0);
+    let unweighed = flapper_task::reward::RewardTerms::default();
+    assert_eq!(unweighed.with_flap_rate_priced(0.0).flap_rate, 0.0);
+}
+
+#[test]
 fn the_smoothness_weight_in_steep_dives_is_its_share_and_glide_slopes_are_not_dives() {
     let first_weight = |reference: Arc<Reference>, dive_share: f64| {
         let mut config = exact_start(TaskConfig::default());
