@@ -786,6 +786,19 @@ task = { stage = 2 }
         assert_eq!(sixth.ppo.smoothness_action_scale, [2.0, 0.0, 2.0, 0.0, 0.0]);
         assert!(flaps_stage.stages[..5] == slope_stage.stages[..5] && sixth.task == gs_sixth.task);
         check_budget(&flaps_stage, "curriculum-glide-slope-flaps-stage.toml");
+
+        // h575: sixF2's stage with the price on a flap faster than 5.75 Hz; nothing else changed.
+        let flap_rate = shipped("experiments/curriculum-flap-rate-stage.toml");
+        let priced = flap_rate.stage_train_config(6).unwrap();
+        assert_eq!((priced.task.reward.flap_rate_weight, priced.task.reward.flap_max_hz), (0.1, 5.75));
+        let unpriced = flapper_task::config::RewardConfig {
+            flap_rate_weight: 0.0,
+            flap_max_hz: sixth.task.reward.flap_max_hz,
+            ..priced.task.reward.clone()
+        };
+        assert!(unpriced == sixth.task.reward && priced.ppo == sixth.ppo, "only the flap's price differs");
+        assert!(flap_rate.stages[..5] == flaps_stage.stages[..5]);
+        check_budget(&flap_rate, "curriculum-flap-rate-stage.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
