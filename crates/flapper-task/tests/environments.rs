@@ -413,6 +413,17 @@ fn a_snapshot_continues_the_flapping_oscillator_in_its_phase_and_filtered_shape(
     snapshot_continues(config);
 }
 
+#[test]
+fn a_snapshot_continues_the_flap_rhythm_that_the_flap_price_reads() {
+    // `fly` flaps at 5.25 Hz: above a 4 Hz bar the price bites from the second top on, and a rhythm not
+    // carried over would read 0 Hz (no price) for the first strokes after the restore.
+    let mut config = TaskConfig::stage(4).unwrap();
+    config.reward.flap_rate_weight = 0.2;
+    config.reward.flap_max_hz = 4.0;
+    config.reward.flap_rate_glide_share = 0.5;
+    snapshot_continues(config);
+}
+
 fn snapshot_continues(config: TaskConfig) {
     let mut original = FlightVecEnv::new(&robot(), config.clone(), ReferenceSource::Procedural, 5, 21, 2).unwrap();
     original.spread_first_time_limits(3);
