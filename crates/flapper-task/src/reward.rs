@@ -35,6 +35,12 @@ pub struct RewardTerms {
     pub flap_rate: f64,
 }
 
+/// A kernel's value `kernel` with its price paid by `share`: 1 - share (1 - kernel), and in full (1) the
+/// kernel's own value, bit for bit (1 - (1 - k) need not be k).
+fn priced_in_part(kernel: f64, share: f64) -> f64 {
+    if share == 1.0 { kernel } else { 1.0 - share.max(0.0) * (1.0 - kernel) }
+}
+
 fn is_zero(value: &f64) -> bool {
     *value == 0.0
 }
@@ -76,18 +82,13 @@ impl RewardTerms {
     /// `reward.energy_min_speed_mps`), above 1 prices the power more (`reward.energy_glide_gain`), down
     /// to 1 - share where the kernel reads 0.
     pub fn with_energy_priced(self, share: f64) -> Self {
-        // In full: the kernel's own value, bit for bit (1 - (1 - e) need not be e).
-        if share == 1.0 { self } else { Self { energy: 1.0 - share.max(0.0) * (1.0 - self.energy), ..self } }
+        Self { energy: priced_in_part(self.energy, share), ..self }
     }
 
     /// The flap's price paid in part: r_flap_rate = 1 - share (1 - k), k the kernel's value (`share` 1
     /// leaves it as it is, bit for bit; 0 reads its top, 1, whatever the frequency). Unweighed (0) stays 0.
     pub fn with_flap_rate_priced(self, share: f64) -> Self {
-        if share == 1.0 || self.flap_rate == 0.0 {
-            self
-        } else {
-            Self { flap_rate: 1.0 - share.max(0.0) * (1.0 - self.flap_rate), ..self }
-        }
+        if self.flap_rate == 0.0 { self } else { Self { flap_rate: priced_in_part(self.flap_rate, share), ..self } }
     }
 
     /// The weighted sum.

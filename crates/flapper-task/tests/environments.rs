@@ -22,6 +22,11 @@ fn northbound() -> Arc<Reference> {
     Arc::new(Reference::new("north", 0.02, points))
 }
 
+/// One environment flying `reference` under `config`.
+fn env_on(config: TaskConfig, reference: Arc<Reference>) -> FlightEnv {
+    FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap()
+}
+
 fn exact_start(mut config: TaskConfig) -> TaskConfig {
     config.initial_state.position_offset_m = [0.0; 3];
     config.initial_state.speed_offset_mps = 0.0;
@@ -104,7 +109,7 @@ fn the_action_rate_term_reads_the_change_of_the_applied_action_and_joins_the_rew
         let mut config = exact_start(TaskConfig::default());
         config.control.action_mode = mode;
         config.reward.action_rate_weight = weight;
-        FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap()
+        env_on(config, northbound())
     };
     let (a, b) = ([0.3f32, 0.0, 0.3, 0.0, -0.2], [-0.3f32, 0.0, -0.3, 0.0, -0.2]);
     for mode in [ActionMode::JointTargets, ActionMode::FlapOscillator] {
@@ -131,7 +136,7 @@ fn the_flap_rate_term_prices_the_flown_stroke_above_its_bar_and_joins_the_reward
         let mut config = exact_start(TaskConfig::default());
         config.reward.flap_rate_weight = weight;
         config.reward.flap_max_hz = 5.5;
-        FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap()
+        env_on(config, northbound())
     };
     // Both flaps driven as a sine of `hz` for 0.6 s (before the unsteered robot tumbles); the last
     // step's kernel.
@@ -184,7 +189,7 @@ fn a_tumbling_robot_ends_on_attitude_in_stage_1_but_not_stage_3() {
         config.episode.max_position_error_m = 1000.0;
         // Launched nose up past the vertical: upside down, heading back.
         config.initial_state.pitch_deg = 100.0;
-        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap();
+        let mut env = env_on(config, northbound());
         (0..25).find_map(|_| env.step(&[0.0; 5]).end)
     };
     assert_eq!(tumble(1), Some(EpisodeEnd::AttitudeLimit));
@@ -197,7 +202,7 @@ fn a_named_reference_is_truncated_when_it_runs_out() {
     let mut config = exact_start(TaskConfig::default());
     config.episode.max_position_error_m = 1000.0;
     let steps = reference.len();
-    let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+    let mut env = env_on(config, reference);
     let end = (0..2000).find_map(|_| env.step(&[0.0; 5]).end);
     assert_eq!(end, Some(EpisodeEnd::ReferenceEnd));
     assert!(!EpisodeEnd::ReferenceEnd.is_termination());
@@ -493,8 +498,7 @@ fn the_smoothness_weight_is_one_without_its_scale_and_falls_where_the_reference_
         let mut config = exact_start(TaskConfig::default());
         config.episode.max_position_error_m = 1000.0;
         config.reward.smoothness_turn_scale_degps = scale;
-        let mut env =
-            FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference.clone()), 1, 0).unwrap();
+        let mut env = env_on(config, reference.clone());
         let mut weights = vec![env.smoothness_weight()];
         while env.step(&[0.0; 5]).end.is_none() {
             weights.push(env.smoothness_weight());
@@ -520,7 +524,7 @@ fn the_smoothness_weight_falls_below_its_speed_and_multiplies_the_turns_weight()
         let mut config = exact_start(TaskConfig::default());
         config.reward.smoothness_min_speed_mps = min_speed;
         config.reward.smoothness_turn_scale_degps = turn_scale;
-        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let env = env_on(config, reference);
         env.smoothness_weight()
     };
     assert_eq!(first_weight(level(2.9), 0.0, 0.0), 1.0, "off: every speed weighs 1");
@@ -569,7 +573,7 @@ fn the_smoothness_weight_rises_on_glide_slopes_up_to_its_gain_and_never_on_climb
         config.reward.smoothness_glide_gain = gain;
         config.reward.smoothness_min_speed_mps = min_speed;
         assert_eq!(config.reward.weighs_smoothness(), gain > 0.0 || min_speed > 0.0);
-        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let env = env_on(config, reference);
         env.smoothness_weight()
     };
     assert_eq!(first_weight(sloped(-0.83), 0.0, 0.0), 1.0, "off: every slope weighs 1");
@@ -589,7 +593,7 @@ fn the_flap_price_on_glide_slopes_is_its_share_and_full_on_level_paths_climbs_an
         let mut config = exact_start(TaskConfig::default());
         config.reward.flap_rate_weight = 0.1;
         config.reward.flap_rate_glide_share = share;
-        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let env = env_on(config, reference);
         env.flap_rate_price_share()
     };
     assert_eq!(first_share(sloped(-0.83), 1.0), 1.0, "by default: in full on every slope");
@@ -615,7 +619,7 @@ fn the_smoothness_weight_in_steep_dives_is_its_share_and_glide_slopes_are_not_di
         config.reward.smoothness_glide_gain = 9.0;
         config.reward.smoothness_dive_share = dive_share;
         assert!(config.reward.weighs_smoothness());
-        let env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(reference), 1, 0).unwrap();
+        let env = env_on(config, reference);
         env.smoothness_weight()
     };
     assert_eq!(first_weight(sloped(-1.5), 0.0), 0.0, "longitudinal's dive, 2.5 : 1: no steady stroke asked");
