@@ -228,6 +228,7 @@ impl VecEnvCore {
         out.set_item("reward_energy", term(|t| t.energy))?;
         out.set_item("reward_action_rate", term(|t| t.action_rate))?;
         out.set_item("reward_flap_rate", term(|t| t.flap_rate))?;
+        out.set_item("reward_glide_hold", term(|t| t.glide_hold))?;
         Ok(out)
     }
 

@@ -151,6 +151,17 @@ pub struct RewardConfig {
     /// there as everywhere, 0 leaves the glide slopes to the glide's own prices.
     #[serde(skip_serializing_if = "is_default_flap_rate_glide_share")]
     pub flap_rate_glide_share: f64,
+    /// Weight of r_glide_hold (not the paper's; 0 leaves it out): pays a held wing where the reference
+    /// sinks at a glide slope (the slopes of `smoothness_glide_gain`, in full from a sink rate of
+    /// [`GLIDE_SINK_MPS`]), by how little the left flap swings over the last 0.4 s
+    /// ([`crate::flap_rhythm::FlapSwing`]). Where the path does not glide it pays nothing. Both glide
+    /// keys are left out of a written config at their defaults.
+    #[serde(skip_serializing_if = "is_default_glide_hold_weight")]
+    pub glide_hold_weight: f64,
+    /// The flap's swing (deg, peak to peak over the last 0.4 s) at which r_glide_hold falls to 1/e of its
+    /// top: by default the range under which `flapper modes` counts the wing as held.
+    #[serde(skip_serializing_if = "is_default_glide_hold_scale_deg")]
+    pub glide_hold_scale_deg: f64,
     /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
     /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
     /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
@@ -202,6 +213,14 @@ fn is_default_flap_rate_scale_hz(value: &f64) -> bool {
 
 fn is_default_flap_rate_glide_share(value: &f64) -> bool {
     *value == RewardConfig::default().flap_rate_glide_share
+}
+
+fn is_default_glide_hold_weight(value: &f64) -> bool {
+    *value == RewardConfig::default().glide_hold_weight
+}
+
+fn is_default_glide_hold_scale_deg(value: &f64) -> bool {
+    *value == RewardConfig::default().glide_hold_scale_deg
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
@@ -391,6 +410,8 @@ impl Default for RewardConfig {
             flap_max_hz: 5.5,
             flap_rate_scale_hz: 0.5,
             flap_rate_glide_share: 1.0,
+            glide_hold_weight: 0.0,
+            glide_hold_scale_deg: crate::flap_rhythm::HELD_FLAP_RANGE_DEG,
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
@@ -601,6 +622,8 @@ impl TaskConfig {
             ("reward.flap_max_hz", r.flap_max_hz, 0.1, 100.0),
             ("reward.flap_rate_scale_hz", r.flap_rate_scale_hz, 1e-3, 100.0),
             ("reward.flap_rate_glide_share", r.flap_rate_glide_share, 0.0, 1.0),
+            ("reward.glide_hold_weight", r.glide_hold_weight, 0.0, 1e3),
+            ("reward.glide_hold_scale_deg", r.glide_hold_scale_deg, 1e-3, 360.0),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
@@ -779,6 +802,10 @@ mod tests {
         assert!(err.contains("reward.flap_rate_glide_share") && err.contains("= 2"), "{err}");
         let err = refused("[reward]\nflap_max_hz = 0\n");
         assert!(err.contains("reward.flap_max_hz") && err.contains("= 0"), "{err}");
+        let err = refused("[reward]\nglide_hold_weight = -0.2\n");
+        assert!(err.contains("reward.glide_hold_weight") && err.contains("-0.2"), "{err}");
+        let err = refused("[reward]\nglide_hold_scale_deg = 0\n");
+        assert!(err.contains("reward.glide_hold_scale_deg") && err.contains("= 0"), "{err}");
         let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = refused("[reward]\nenergy_dive_share = 1.5\n");

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
 use crate::config::{GLIDE_MIN_RATIO, GLIDE_SINK_MPS, TaskConfig, speed_ramp};
 use crate::control_loop::{ControlLoop, ControlLoopState};
-use crate::flap_rhythm::FlapRhythm;
+use crate::flap_rhythm::{FlapRhythm, FlapSwing};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
 use crate::reference::Reference;
@@ -91,6 +91,9 @@ pub struct EnvSnapshot {
     /// The flap's rhythm (`reward.flap_rate_weight`; the default in snapshots from before it).
     #[serde(default, skip_serializing_if = "FlapRhythm::is_unused")]
     flap_rhythm: FlapRhythm,
+    /// The flap's swing (`reward.glide_hold_weight`; likewise).
+    #[serde(default, skip_serializing_if = "FlapSwing::is_unused")]
+    flap_swing: FlapSwing,
     episode_return: f64,
     term_sums: RewardTerms,
 }
@@ -129,6 +132,8 @@ pub struct FlightEnv {
     oscillator: OscillatorState,
     /// The left flap's frequency as flown, for r_flap_rate (read only when it is weighed).
     flap_rhythm: FlapRhythm,
+    /// The left flap's swing over the last 0.4 s, for r_glide_hold (likewise).
+    flap_swing: FlapSwing,
     episode_return: f64,
     term_sums: RewardTerms,
     drawn: DrawnDynamics,
@@ -166,6 +171,7 @@ impl FlightEnv {
             previous_action: [0.0; ACTION_SIZE],
             oscillator: OscillatorState::default(),
             flap_rhythm: FlapRhythm::default(),
+            flap_swing: FlapSwing::default(),
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
             drawn: DrawnDynamics::default(),
@@ -218,6 +224,7 @@ impl FlightEnv {
         self.previous_action = self.actions.at_rest(&initial.joint_positions_rad);
         self.oscillator = self.actions.oscillator_at_rest(&self.previous_action);
         self.flap_rhythm = FlapRhythm::default();
+        self.flap_swing = FlapSwing::default();
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
@@ -290,8 +297,12 @@ impl FlightEnv {
         let period = self.control.control_period_s();
         let power = self.control.last_step_work().absolute_j / period;
         let time = self.step as f64 * period;
+        let flap_rad = sim.joint_positions()[ActuatedJoint::FlapLeft.index()];
         if self.config.reward.flap_rate_weight > 0.0 {
-            self.flap_rhythm.update(sim.joint_positions()[ActuatedJoint::FlapLeft.index()], time, period);
+            self.flap_rhythm.update(flap_rad, time, period);
+        }
+        if self.config.reward.glide_hold_weight > 0.0 {
+            self.flap_swing.update(flap_rad);
         }
         let terms = RewardTerms::evaluate(
             &self.config.reward,
@@ -303,6 +314,8 @@ impl FlightEnv {
                 absolute_power_w: power,
                 action_change,
                 flap_hz: self.flap_rhythm.frequency_hz(time),
+                flap_swing_deg: self.flap_swing.range_deg(),
+                glide_share: self.glide_share(),
             },
         )
         .with_energy_priced(self.energy_price_share())
@@ -347,6 +360,7 @@ impl FlightEnv {
             previous_action: self.previous_action,
             oscillator: self.oscillator,
             flap_rhythm: self.flap_rhythm,
+            flap_swing: self.flap_swing,
             episode_return: self.episode_return,
             term_sums: self.term_sums,
         }
@@ -375,6 +389,7 @@ impl FlightEnv {
         self.previous_action = snapshot.previous_action;
         self.oscillator = snapshot.oscillator;
         self.flap_rhythm = snapshot.flap_rhythm;
+        self.flap_swing = snapshot.flap_swing;
         self.episode_return = snapshot.episode_return;
         self.term_sums = snapshot.term_sums;
         Ok(())
@@ -418,6 +433,13 @@ impl FlightEnv {
     pub fn flap_rate_price_share(&self) -> f64 {
         let share = self.config.reward.flap_rate_glide_share;
         if share == 1.0 { 1.0 } else { self.slope_factor(share - 1.0, 1.0) }
+    }
+
+    /// How much the reference glides at the current step, for r_glide_hold: its sink rate over
+    /// [`GLIDE_SINK_MPS`] (at most 1) where it sinks at a slope the robot can glide, 0 on level paths,
+    /// climbs and steeper dives.
+    pub fn glide_share(&self) -> f64 {
+        self.slope_factor(1.0, 1.0) - 1.0
     }
 
     /// A reward term's factor for the slope the reference flies at the current step: 1 +

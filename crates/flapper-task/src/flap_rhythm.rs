@@ -1,6 +1,7 @@
 //! The flap's rhythm as the robot flies it: the frequency of the left flap joint, read online from the
 //! times of its tops (the maxima of its angle), for the reward's price on a fast stroke
-//! (`reward.flap_rate_weight`).
+//! (`reward.flap_rate_weight`); and its swing, the peak-to-peak range over the last
+//! [`FLAP_SWING_WINDOW_STEPS`], for the reward's pay for a held wing (`reward.glide_hold_weight`).
 //!
 //! A top counts once the angle has fallen [`HELD_FLAP_RANGE_DEG`] below it after rising as much from the
 //! bottom before it: a wing that moves less than that, peak to peak, is held (gliding) by the same
@@ -102,6 +103,42 @@ impl FlapRhythm {
     }
 }
 
+/// How many control steps (0.4 s at 50 Hz, `flapper modes`' glide window) [`FlapSwing`] looks back over.
+pub const FLAP_SWING_WINDOW_STEPS: usize = 20;
+
+/// The left flap's last [`FLAP_SWING_WINDOW_STEPS`] angles, carried across control steps (and in
+/// environment snapshots; it stays at its default, which snapshots leave out, when the task does not
+/// weigh r_glide_hold). Unlike the rhythm's frequency it reads a wobble too: how far the wing is from
+/// held, in degrees, rather than whether it strokes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct FlapSwing {
+    angles_rad: [f64; FLAP_SWING_WINDOW_STEPS],
+    /// Where the next angle goes, and how many have been seen (at most the window).
+    next: usize,
+    seen: usize,
+}
+
+impl FlapSwing {
+    /// Nothing seen yet.
+    pub fn is_unused(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Takes the angle of one control step.
+    pub fn update(&mut self, angle_rad: f64) {
+        self.angles_rad[self.next] = angle_rad;
+        self.next = (self.next + 1) % FLAP_SWING_WINDOW_STEPS;
+        self.seen = (self.seen + 1).min(FLAP_SWING_WINDOW_STEPS);
+    }
+
+    /// The peak-to-peak range (deg) of the angles in the window (fewer at the start; 0 before any).
+    pub fn range_deg(&self) -> f64 {
+        let angles = &self.angles_rad[..self.seen];
+        let (lo, hi) = angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+        if self.seen == 0 { 0.0 } else { (hi - lo).to_degrees() }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,5 +183,21 @@ mod tests {
         assert!((at_stop - 6.0).abs() < 0.1, "{at_stop}");
         let later = stopped.frequency_hz(2.0);
         assert!(later < 1.2 && later > 0.5, "1 s after the stop: {later}");
+    }
+
+    #[test]
+    fn the_swing_is_the_range_of_the_last_window_and_forgets_a_stroke_once_the_wing_is_held() {
+        let mut swing = FlapSwing::default();
+        assert_eq!(swing.range_deg(), 0.0);
+        // A 5 Hz stroke of +-40 deg for 1 s: its whole range within a window of two strokes.
+        let stroke = |k: usize| 40f64.to_radians() * (std::f64::consts::TAU * 5.0 * k as f64 * PERIOD_S).sin();
+        (0..50).for_each(|k| swing.update(stroke(k)));
+        assert!((swing.range_deg() - 80.0).abs() < 5.0, "sampled at 50 Hz: {}", swing.range_deg());
+        // Held at 3 deg with a 1 deg wobble: the stroke is still in the window for its length, then gone.
+        let held = |k: usize| (3.0 + 0.5 * (k as f64).sin()).to_radians();
+        (50..50 + FLAP_SWING_WINDOW_STEPS - 1).for_each(|k| swing.update(held(k)));
+        assert!(swing.range_deg() > 10.0, "the last stroke still seen: {}", swing.range_deg());
+        swing.update(held(69));
+        assert!(swing.range_deg() <= 1.0 + 1e-9, "{}", swing.range_deg());
     }
 }

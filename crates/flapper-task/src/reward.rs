@@ -11,11 +11,16 @@
 //! | r_energy | exp(-P / s), P = mean of sum(abs(torque * joint velocity)) over the step | s = 20 W |
 //! | r_action_rate | exp(-d^2 / s^2), d = norm of the change of the applied action since the last step | s = 1.0 |
 //! | r_flap_rate | exp(-x^2 / s^2), x = how far the flap's frequency is above `flap_max_hz` (0 below) | s = 0.5 Hz |
+//! | r_glide_hold | g exp(-a^2 / s^2), a = the flap's swing over 0.4 s, g = how much the path glides (0-1) | s = 10 deg |
 //!
 //! r_action_rate is not the paper's: its weight is 0 unless a config sets `action_rate_weight`. It
 //! prices a quick change of what the policy asks (a dither) without pricing a steady flap. Nor is
 //! r_flap_rate (weight 0 unless `flap_rate_weight` is set): it prices a stroke faster than a bird's, the
 //! frequency read online from the left flap's tops ([`crate::flap_rhythm`]); a held wing reads 0 Hz.
+//! Nor is r_glide_hold (weight 0 unless `glide_hold_weight` is set): it pays a held wing where the path
+//! sinks at a slope the robot can glide (g, the glide share of [`crate::env::FlightEnv::glide_share`]),
+//! by how little the flap swings ([`crate::flap_rhythm::FlapSwing`]), and nothing elsewhere: the
+//! paper's "gliding instead of flapping when possible" asked for directly.
 
 use crate::config::RewardConfig;
 
@@ -33,6 +38,9 @@ pub struct RewardTerms {
     /// of runs without it (checkpoints' environment states) stay byte for byte as before it.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub flap_rate: f64,
+    /// 0 unless weighed (`reward.glide_hold_weight`) on a glide slope; left out of snapshots at 0, likewise.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub glide_hold: f64,
 }
 
 /// A kernel's value `kernel` with its price paid by `share`: 1 - share (1 - kernel), and in full (1) the
@@ -58,6 +66,11 @@ pub struct RewardInputs {
     pub action_change: f64,
     /// The flap's frequency (Hz) as [`crate::flap_rhythm::FlapRhythm`] reads it (0 for a held wing).
     pub flap_hz: f64,
+    /// The flap's peak-to-peak range (deg) over the last 0.4 s ([`crate::flap_rhythm::FlapSwing`]).
+    pub flap_swing_deg: f64,
+    /// How much the reference glides here: 0 on level paths, climbs and steeper dives, up to 1 on a glide
+    /// slope ([`crate::env::FlightEnv::glide_share`]).
+    pub glide_share: f64,
 }
 
 impl RewardTerms {
@@ -71,6 +84,11 @@ impl RewardTerms {
             action_rate: gaussian(x.action_change, config.action_rate_scale),
             flap_rate: if config.flap_rate_weight > 0.0 {
                 gaussian((x.flap_hz - config.flap_max_hz).max(0.0), config.flap_rate_scale_hz)
+            } else {
+                0.0
+            },
+            glide_hold: if config.glide_hold_weight > 0.0 {
+                x.glide_share.clamp(0.0, 1.0) * gaussian(x.flap_swing_deg, config.glide_hold_scale_deg)
             } else {
                 0.0
             },
@@ -99,6 +117,7 @@ impl RewardTerms {
             + config.energy_weight * self.energy
             + config.action_rate_weight * self.action_rate
             + config.flap_rate_weight * self.flap_rate
+            + config.glide_hold_weight * self.glide_hold
     }
 
     pub fn add(&mut self, other: &Self) {
@@ -108,6 +127,7 @@ impl RewardTerms {
         self.energy += other.energy;
         self.action_rate += other.action_rate;
         self.flap_rate += other.flap_rate;
+        self.glide_hold += other.glide_hold;
     }
 }
 
@@ -117,8 +137,15 @@ mod tests {
 
     #[test]
     fn the_energy_priced_in_part_moves_its_kernel_towards_the_top_and_leaves_the_other_terms() {
-        let terms =
-            RewardTerms { position: 0.9, body_rate: 0.8, level: 0.7, energy: 0.2, action_rate: 0.6, flap_rate: 0.5 };
+        let terms = RewardTerms {
+            position: 0.9,
+            body_rate: 0.8,
+            level: 0.7,
+            energy: 0.2,
+            action_rate: 0.6,
+            flap_rate: 0.5,
+            glide_hold: 0.4,
+        };
         assert_eq!(terms.with_energy_priced(1.0), terms, "in full: unchanged, bit for bit");
         assert_eq!(terms.with_energy_priced(0.0), RewardTerms { energy: 1.0, ..terms }, "waived: the top");
         assert!((terms.with_energy_priced(0.5).energy - 0.6).abs() < 1e-12, "half the price: halfway up");
@@ -134,6 +161,8 @@ mod tests {
             absolute_power_w: 0.0,
             action_change: 0.0,
             flap_hz: 5.0,
+            flap_swing_deg: 0.0,
+            glide_share: 0.0,
         }
     }
 
@@ -141,9 +170,15 @@ mod tests {
     fn ideal_flight_earns_the_sum_of_the_weights() {
         let c = RewardConfig::default();
         let terms = RewardTerms::evaluate(&c, &ideal());
-        let ones =
-            RewardTerms { position: 1.0, body_rate: 1.0, level: 1.0, energy: 1.0, action_rate: 1.0, flap_rate: 0.0 };
-        assert_eq!(terms, ones, "r_flap_rate reads 0 unless weighed");
+        let ones = RewardTerms {
+            position: 1.0,
+            body_rate: 1.0,
+            level: 1.0,
+            energy: 1.0,
+            action_rate: 1.0,
+            ..Default::default()
+        };
+        assert_eq!(terms, ones, "r_flap_rate and r_glide_hold read 0 unless weighed");
         assert!((terms.total(&c) - 0.85).abs() < 1e-12);
     }
 
@@ -182,6 +217,30 @@ mod tests {
         assert!((above(5.5 + c.flap_rate_scale_hz) - (-1f64).exp()).abs() < 1e-12);
         assert!(above(6.0) > above(6.25) && above(6.25) > above(6.5), "falls with the excess");
         assert!((at(&c, 5.0).total(&c) - at(&c, 6.0).total(&c) - 0.1 * (1.0 - above(6.0))).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_glide_hold_term_pays_a_held_wing_only_where_the_path_glides_and_only_with_its_weight() {
+        let mut c = RewardConfig::default();
+        let at = |c: &RewardConfig, swing: f64, glide: f64| {
+            RewardTerms::evaluate(c, &RewardInputs { flap_swing_deg: swing, glide_share: glide, ..ideal() })
+        };
+        // Off by default: nothing, gliding or not.
+        assert_eq!(at(&c, 0.0, 1.0).glide_hold, 0.0);
+        assert_eq!(at(&c, 0.0, 1.0).total(&c), at(&c, 60.0, 1.0).total(&c));
+        c.glide_hold_weight = 0.2;
+        // Where the path glides in full: the held wing earns the whole weight, a stroke nothing.
+        assert_eq!(at(&c, 0.0, 1.0).glide_hold, 1.0);
+        assert!((at(&c, c.glide_hold_scale_deg, 1.0).glide_hold - (-1f64).exp()).abs() < 1e-12);
+        assert!(at(&c, 60.0, 1.0).glide_hold < 1e-12, "a 60 deg stroke is not a glide");
+        assert!(at(&c, 5.0, 1.0).glide_hold > at(&c, 8.0, 1.0).glide_hold, "the smaller the swing, the more");
+        // In part on a shallower sink, nothing on a level path, a climb or a dive.
+        assert!((at(&c, 0.0, 0.25).glide_hold - 0.25).abs() < 1e-12);
+        assert_eq!(at(&c, 0.0, 0.0).glide_hold, 0.0);
+        assert!(
+            (at(&c, 0.0, 1.0).total(&c) - at(&c, 5.0, 1.0).total(&c) - 0.2 * (1.0 - at(&c, 5.0, 1.0).glide_hold)).abs()
+                < 1e-12
+        );
     }
 
     #[test]

@@ -169,6 +169,55 @@ fn the_flap_rate_term_prices_the_flown_stroke_above_its_bar_and_joins_the_reward
 }
 
 #[test]
+fn the_glide_hold_term_pays_held_wings_on_a_glide_slope_and_nothing_to_a_stroke_or_on_a_level_path() {
+    let env = |weight: f64, reference: Arc<Reference>| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.glide_hold_weight = weight;
+        env_on(config, reference)
+    };
+    // 0.8 s (40 steps) of held wings or of a 5 Hz stroke; every step's kernel.
+    let fly = |weight: f64, reference: Arc<Reference>, stroke: bool| {
+        let mut env = env(weight, reference);
+        (0..40)
+            .map(|k| {
+                let flap =
+                    if stroke { (0.8 * (std::f64::consts::TAU * 5.0 * k as f64 * 0.02).sin()) as f32 } else { 0.0 };
+                env.step(&[flap, 0.0, flap, 0.0, -0.2])
+            })
+            .collect::<Vec<_>>()
+    };
+    let glide = sloped(-0.83);
+    let held = fly(0.3, glide.clone(), false);
+    let unweighed = fly(0.0, glide.clone(), false);
+    for (w, p) in held.iter().zip(&unweighed) {
+        // Held wings on a glide slope (their servos settling within 1 deg) earn nearly the kernel's top
+        // times the slope's share (1 here), from the start.
+        assert!(w.terms.glide_hold > 0.99, "{:?}", w.terms);
+        // The weight changes the reward, not the flight; unweighed, the kernel reads 0.
+        let without = flapper_task::reward::RewardTerms { glide_hold: 0.0, ..w.terms };
+        assert_eq!((p.position_error_m, p.terms), (w.position_error_m, without));
+        assert!((w.reward - p.reward - 0.3 * w.terms.glide_hold).abs() < 1e-12);
+    }
+    // A 5 Hz stroke earns nothing once its swing is seen (0.1 s, half a stroke: some 40 deg).
+    let stroke = fly(0.3, glide, true);
+    assert!(stroke[5..].iter().all(|s| s.terms.glide_hold < 1e-3), "{:?}", stroke[39].terms);
+    // Nowhere but on a glide slope: held wings on a level path or a climb earn nothing.
+    for reference in [sloped(0.0), sloped(0.8), northbound()] {
+        assert!(fly(0.3, reference, false).iter().all(|s| s.terms.glide_hold == 0.0));
+    }
+}
+
+#[test]
+fn the_glide_share_rises_with_the_sink_to_a_glide_slope_and_is_zero_elsewhere() {
+    let share = |reference: Arc<Reference>| env_on(exact_start(TaskConfig::default()), reference).glide_share();
+    assert!((share(sloped(-0.83)) - 1.0).abs() < 1e-4, "a glide slope");
+    assert!((share(sloped(-0.25)) - 0.5).abs() < 1e-4, "half the full sink: half");
+    for (vertical, what) in [(0.0, "level"), (0.8, "a climb"), (-1.5, "longitudinal's dive")] {
+        assert!(share(sloped(vertical)).abs() < 1e-6, "{what}");
+    }
+}
+
+#[test]
 fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();
@@ -427,6 +476,29 @@ fn a_snapshot_continues_the_flap_rhythm_that_the_flap_price_reads() {
     config.reward.flap_max_hz = 4.0;
     config.reward.flap_rate_glide_share = 0.5;
     snapshot_continues(config);
+}
+
+#[test]
+fn a_snapshot_continues_the_flap_swing_that_the_glide_hold_reads() {
+    // A 5 Hz stroke on a glide slope reads nothing of the kernel's top; a swing not carried over would
+    // see only the other environment's first steps' small swing, or none, after the restore.
+    let mut config = exact_start(TaskConfig::default());
+    config.reward.glide_hold_weight = 0.3;
+    let stroke = |k: usize| {
+        let flap = (0.8 * (std::f64::consts::TAU * 5.0 * k as f64 * 0.02).sin()) as f32;
+        [flap, 0.0, flap, 0.0, -0.2]
+    };
+    let mut original = env_on(config.clone(), sloped(-0.83));
+    (0..30).for_each(|k| _ = original.step(&stroke(k)));
+    let snapshot = original.snapshot();
+    let mut resumed = env_on(config, sloped(-0.83));
+    (0..3).for_each(|_| _ = resumed.step(&[0.0, 0.0, 0.0, 0.0, -0.2]));
+    resumed.restore(&snapshot).unwrap();
+    for k in 30..45 {
+        let (a, b) = (original.step(&stroke(k)), resumed.step(&stroke(k)));
+        assert!(a.terms.glide_hold < 1e-3, "step {k}: {:?}", a.terms);
+        assert_eq!((a.reward, a.terms), (b.reward, b.terms), "step {k}");
+    }
 }
 
 fn snapshot_continues(config: TaskConfig) {

@@ -9,12 +9,10 @@ use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
 /// Names of the diagnostics: each reward kernel's value in (0, 1], before weighting.
 pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level", "r_energy"];
 
-/// The diagnostic logged after [`REWARD_TERM_NAMES`] when the task weighs it (`reward.action_rate_weight`
-/// above 0), so that the logs of runs without it keep their columns and resume as they were written.
-pub const ACTION_RATE_TERM_NAME: &str = "r_action_rate";
-
-/// The diagnostic logged last when the task weighs it (`reward.flap_rate_weight` above 0), likewise.
-pub const FLAP_RATE_TERM_NAME: &str = "r_flap_rate";
+/// The diagnostics logged after [`REWARD_TERM_NAMES`], in this order, each only when the task weighs it
+/// (`reward.action_rate_weight`, `reward.flap_rate_weight`, `reward.glide_hold_weight` above 0), so that
+/// the logs of runs without them keep their columns and resume as they were written.
+pub const WEIGHED_TERM_NAMES: [&str; 3] = ["r_action_rate", "r_flap_rate", "r_glide_hold"];
 
 /// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
 const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
@@ -42,8 +40,8 @@ impl EndReason for FlightEnd {
 pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
-    logs_action_rate: bool,
-    logs_flap_rate: bool,
+    /// Which of [`WEIGHED_TERM_NAMES`] are logged.
+    logs_weighed: [bool; 3],
     /// `reward.smoothness_turn_scale_degps` above 0: the learner's smoothness term is weighted per step.
     weighs_smoothness: bool,
 }
@@ -58,20 +56,20 @@ impl FlightEnvs {
         seed: u64,
         threads: usize,
     ) -> Result<Self, ModelError> {
-        let logs_action_rate = task.reward.action_rate_weight > 0.0;
-        let logs_flap_rate = task.reward.flap_rate_weight > 0.0;
+        let r = &task.reward;
+        let logs_weighed = [r.action_rate_weight, r.flap_rate_weight, r.glide_hold_weight].map(|w| w > 0.0);
         let weighs_smoothness = task.reward.weighs_smoothness();
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
-        let mut envs = Self { diagnostics: Vec::new(), inner, logs_action_rate, logs_flap_rate, weighs_smoothness };
+        let mut envs = Self { diagnostics: Vec::new(), inner, logs_weighed, weighs_smoothness };
         envs.diagnostics = vec![0.0; count * envs.logged_terms()];
         Ok(envs)
     }
 
-    /// How many reward kernels each environment logs: the four of [`REWARD_TERM_NAMES`], and
-    /// [`ACTION_RATE_TERM_NAME`] and [`FLAP_RATE_TERM_NAME`] when weighed.
+    /// How many reward kernels each environment logs: the four of [`REWARD_TERM_NAMES`], and those of
+    /// [`WEIGHED_TERM_NAMES`] that are weighed.
     fn logged_terms(&self) -> usize {
-        REWARD_TERM_NAMES.len() + usize::from(self.logs_action_rate) + usize::from(self.logs_flap_rate)
+        REWARD_TERM_NAMES.len() + self.logs_weighed.iter().filter(|&&logged| logged).count()
     }
 
     pub fn inner(&self) -> &FlightVecEnv {
@@ -98,10 +96,10 @@ impl VecEnv for FlightEnvs {
         self.inner.step(actions)?;
         let per_env = self.logged_terms();
         for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
-            let weighed = [(true, t.position), (true, t.body_rate), (true, t.level), (true, t.energy)]
-                .into_iter()
-                .chain([(self.logs_action_rate, t.action_rate), (self.logs_flap_rate, t.flap_rate)]);
-            for (o, (_, value)) in out.iter_mut().zip(weighed.filter(|(logged, _)| *logged)) {
+            let weighed = self.logs_weighed.into_iter().zip([t.action_rate, t.flap_rate, t.glide_hold]);
+            let logged =
+                [(true, t.position), (true, t.body_rate), (true, t.level), (true, t.energy)].into_iter().chain(weighed);
+            for (o, (_, value)) in out.iter_mut().zip(logged.filter(|(logged, _)| *logged)) {
                 *o = value as f32;
             }
         }
@@ -141,8 +139,8 @@ impl VecEnv for FlightEnvs {
     }
 
     fn diagnostic_names(&self) -> Vec<String> {
-        let extra = [(self.logs_action_rate, ACTION_RATE_TERM_NAME), (self.logs_flap_rate, FLAP_RATE_TERM_NAME)];
-        let extra = extra.into_iter().filter(|(logged, _)| *logged).map(|(_, name)| name);
+        let extra = self.logs_weighed.into_iter().zip(WEIGHED_TERM_NAMES);
+        let extra = extra.filter(|(logged, _)| *logged).map(|(_, name)| name);
         REWARD_TERM_NAMES.iter().copied().chain(extra).map(str::to_string).collect()
     }
 

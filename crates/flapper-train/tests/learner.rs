@@ -97,12 +97,13 @@ fn a_resumed_flight_run_equals_the_uninterrupted_one() {
 
 #[test]
 fn the_action_rate_kernel_and_the_smoothness_are_logged_when_weighted_and_older_logs_keep_their_columns() {
-    // Weighted: the action-rate and flap-rate kernels, the smoothness and the curvature together.
+    // Weighted: the action-rate, flap-rate and glide-hold kernels, the smoothness and the curvature together.
     let columns = |weight: Option<f64>, smoothness: f32, name: &str| {
         let mut config = small_flight_config(2, 5);
         if let Some(w) = weight {
             config.task.reward.action_rate_weight = w;
             config.task.reward.flap_rate_weight = w;
+            config.task.reward.glide_hold_weight = w;
             config.ppo.curvature_coef = smoothness;
         }
         config.ppo.smoothness_coef = smoothness;
@@ -116,7 +117,7 @@ fn the_action_rate_kernel_and_the_smoothness_are_logged_when_weighted_and_older_
     };
     let (header, _) = columns(None, 0.0, "no-action-rate");
     assert!(header.contains(&"r_energy".to_string()) && !header.contains(&"r_action_rate".to_string()));
-    for absent in ["smoothness", "r_flap_rate", "curvature"] {
+    for absent in ["smoothness", "r_flap_rate", "r_glide_hold", "curvature"] {
         assert!(!header.contains(&absent.to_string()), "{absent} logged unweighed");
     }
     let (header, rows) = columns(Some(0.2), 0.5, "action-rate");
@@ -124,11 +125,15 @@ fn the_action_rate_kernel_and_the_smoothness_are_logged_when_weighted_and_older_
     let (rate, smoothness) = (column("r_action_rate"), column("smoothness"));
     let (flap_rate, curvature) = (column("r_flap_rate"), column("curvature"));
     assert_eq!(flap_rate, rate + 1, "the flap's kernel after the action rate's");
+    let glide_hold = column("r_glide_hold");
+    assert_eq!(glide_hold, flap_rate + 1, "the glide's kernel after the flap's");
     assert_eq!(curvature, smoothness + 1);
     for row in rows {
         assert_eq!(row.len(), header.len());
         let value: f64 = row[flap_rate].parse().unwrap();
         assert!(value > 0.0 && value <= 1.0, "r_flap_rate {value}");
+        let value: f64 = row[glide_hold].parse().unwrap();
+        assert!((0.0..=1.0).contains(&value), "r_glide_hold {value}");
         let value: f64 = row[curvature].parse().unwrap();
         assert!(value > 0.0, "curvature {value}: a fresh policy's mean bends between steps");
         let value: f64 = row[rate].parse().unwrap();
