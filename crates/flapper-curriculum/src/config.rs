@@ -799,6 +799,19 @@ task = { stage = 2 }
         assert!(unpriced == sixth.task.reward && priced.ppo == sixth.ppo, "only the flap's price differs");
         assert!(flap_rate.stages[..5] == flaps_stage.stages[..5]);
         check_budget(&flap_rate, "curriculum-flap-rate-stage.toml");
+
+        // gz30: h575's stage with the held wing paid on glide slopes; nothing else changed.
+        let glide_hold = shipped("experiments/curriculum-glide-hold-stage.toml");
+        let paid = glide_hold.stage_train_config(6).unwrap();
+        assert_eq!((paid.task.reward.glide_hold_weight, paid.task.reward.glide_hold_scale_deg), (0.5, 30.0));
+        let unpaid = flapper_task::config::RewardConfig {
+            glide_hold_weight: 0.0,
+            glide_hold_scale_deg: priced.task.reward.glide_hold_scale_deg,
+            ..paid.task.reward.clone()
+        };
+        assert!(unpaid == priced.task.reward && paid.ppo == priced.ppo, "only the glide's pay differs");
+        assert!(glide_hold.stages[..5] == flap_rate.stages[..5]);
+        check_budget(&glide_hold, "curriculum-glide-hold-stage.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
