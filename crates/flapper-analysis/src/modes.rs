@@ -13,6 +13,7 @@ use flapper_plot::{COLORS, Curve, Panel};
 use flapper_ppo::ActorCritic;
 use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
+use flapper_task::flap_rhythm::peak_to_peak;
 use flapper_task::reference::NAMED_START_M;
 use flapper_task::reference::named::named;
 use serde::{Deserialize, Serialize};
@@ -299,12 +300,6 @@ pub fn held_wings(flap_rad: &[f64], dt_s: f64) -> Vec<bool> {
     (0..flap_rad.len())
         .map(|k| peak_to_peak(&flap_rad[k.saturating_sub(half)..(k + half + 1).min(flap_rad.len())]) < limit)
         .collect()
-}
-
-/// Largest minus smallest value (negative infinity for none).
-fn peak_to_peak(values: &[f64]) -> f64 {
-    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
-    hi - lo
 }
 
 #[cfg(test)]

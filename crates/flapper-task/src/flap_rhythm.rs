@@ -133,10 +133,15 @@ impl FlapSwing {
 
     /// The peak-to-peak range (deg) of the angles in the window (fewer at the start; 0 before any).
     pub fn range_deg(&self) -> f64 {
-        let angles = &self.angles_rad[..self.seen];
-        let (lo, hi) = angles.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
-        if self.seen == 0 { 0.0 } else { (hi - lo).to_degrees() }
+        if self.seen == 0 { 0.0 } else { peak_to_peak(&self.angles_rad[..self.seen]).to_degrees() }
     }
+}
+
+/// Largest minus smallest value (negative infinity for none): the swing's range here, and each window's
+/// in `flapper modes`.
+pub fn peak_to_peak(values: &[f64]) -> f64 {
+    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+    hi - lo
 }
 
 #[cfg(test)]
