@@ -67,6 +67,9 @@ impl DeploymentFacts {
     ) -> Result<Self, DeployError> {
         let task = &file.task;
         let layout = ObservationLayout::of(&task.observation);
+        if layout.clock {
+            return Err(DeployError::Clock { path: path.to_owned(), clock_hz: task.observation.clock_hz });
+        }
         let sim = robot.instantiate()?;
         let control_period_s = task.control_period_s(robot.timestep_s());
         let actions = ActionMap::new(&sim, &task.control, control_period_s);

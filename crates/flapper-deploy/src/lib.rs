@@ -39,6 +39,11 @@ pub enum DeployError {
     OutName { path: PathBuf, why: &'static str },
     #[error("{0}")]
     Compiler(String),
+    #[error(
+        "'{path}' reads a {clock_hz} Hz clock (`[task.observation] clock_hz`), which the exports do not carry yet; \
+         export a policy trained without it"
+    )]
+    Clock { path: PathBuf, clock_hz: f64 },
 }
 
 /// One dense layer of the actor: `out = weight x in + bias`, `weight` row-major [fan_out x fan_in]

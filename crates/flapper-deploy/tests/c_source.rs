@@ -102,3 +102,22 @@ fn the_export_refuses_an_existing_file_and_a_name_without_c() {
     assert!(error.contains("NAME.c"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_export_refuses_a_policy_that_reads_a_clock() {
+    use flapper_ppo::checkpoint;
+    let robot = RobotModel::flapper().unwrap();
+    let source = checkpoint::load(&shipped("policies/history/stage1/policy.safetensors")).unwrap();
+    let mut config: toml::Table = source.info.config_toml.parse().unwrap();
+    let task = config.entry("task").or_insert(toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
+    let observation = task.entry("observation").or_insert(toml::Value::Table(toml::Table::new()));
+    observation.as_table_mut().unwrap().insert("clock_hz".into(), toml::Value::Float(5.3));
+    let clocked = source.with_inputs_appended(2);
+    let info = checkpoint::CheckpointInfo { config_toml: toml::to_string(&config).unwrap(), ..clocked.info.clone() };
+    let dir = scratch("clock");
+    let path = dir.join("clocked.safetensors");
+    checkpoint::save(&path, &info, &clocked.policy, None, None).unwrap();
+    let error = DeployablePolicy::load(&path, &robot).expect_err("a clock policy is refused").to_string();
+    assert!(error.contains("clocked.safetensors") && error.contains("5.3 Hz clock"), "{error}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -61,6 +61,21 @@ impl ActorCritic {
         actions.extend_from_slice(mean);
     }
 
+    /// This policy given `extra` more observations after its own, weighted 0 by both networks and read
+    /// through the normalizer as they come (mean 0, variance 1): it acts and values as before, and
+    /// training can learn to use them.
+    pub fn with_inputs_appended(&self, extra: usize) -> Self {
+        let mut normalizer = self.normalizer.clone();
+        normalizer.mean.extend(std::iter::repeat_n(0.0, extra));
+        normalizer.variance.extend(std::iter::repeat_n(1.0, extra));
+        Self {
+            actor: self.actor.with_inputs_appended(extra),
+            critic: self.critic.with_inputs_appended(extra),
+            log_std: self.log_std.clone(),
+            normalizer,
+        }
+    }
+
     /// Sets every action's noise (standard deviation) to `std`; the log from `libm`, as everywhere in
     /// training, not the platform's (glibc's `logf` differs from it in the last bit for some values).
     pub fn set_noise_std(&mut self, std: f32) {

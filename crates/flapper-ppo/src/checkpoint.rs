@@ -137,6 +137,28 @@ impl Checkpoint {
         Ok(())
     }
 
+    /// This file's learner given `extra` more observations after its own ([`ActorCritic::with_inputs_appended`]),
+    /// its Adam moments for the new weights 0.
+    pub fn with_inputs_appended(self, extra: usize) -> Self {
+        let policy = self.policy.with_inputs_appended(extra);
+        let optimizer = self.optimizer.map(|mut optimizer| {
+            for (adam, mlp) in
+                [(&mut optimizer.actor, &self.policy.actor), (&mut optimizer.critic, &self.policy.critic)]
+            {
+                adam.first_moment = mlp.values_with_inputs_appended(&adam.first_moment, extra);
+                adam.second_moment = mlp.values_with_inputs_appended(&adam.second_moment, extra);
+            }
+            optimizer
+        });
+        let info = CheckpointInfo {
+            observation_size: self.info.observation_size + extra,
+            actor_sizes: policy.actor.sizes().to_vec(),
+            critic_sizes: policy.critic.sizes().to_vec(),
+            ..self.info
+        };
+        Self { info, policy, optimizer, environments: self.environments }
+    }
+
     /// The learner's random stream as saved.
     pub fn rng(&self) -> Option<ChaCha8Rng> {
         self.info.rng.as_ref().and_then(RngState::restore)

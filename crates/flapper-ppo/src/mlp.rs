@@ -171,6 +171,29 @@ impl Mlp {
         &all[layer]
     }
 
+    /// This MLP with `extra` more inputs after its own, each weighted 0: it computes the same outputs
+    /// whatever the new inputs hold (how a trained policy is given an input it never had).
+    pub fn with_inputs_appended(&self, extra: usize) -> Self {
+        let mut sizes = self.sizes.clone();
+        sizes[0] += extra;
+        let params = self.values_with_inputs_appended(&self.params, extra);
+        Self::with_params(&sizes, self.activation, params).expect("widened to the widened sizes")
+    }
+
+    /// `values`, laid out as this MLP's parameters (e.g. Adam's moments), laid out for
+    /// [`Mlp::with_inputs_appended`]: the first weight's rows each gain `extra` zeros.
+    pub fn values_with_inputs_appended(&self, values: &[f32], extra: usize) -> Vec<f32> {
+        assert_eq!(values.len(), self.params.len(), "not laid out as this MLP's parameters");
+        let first = self.tensors[0].range.clone();
+        let mut widened = Vec::with_capacity(values.len() + extra * self.sizes[1]);
+        for row in values[first.clone()].chunks_exact(self.sizes[0]) {
+            widened.extend_from_slice(row);
+            widened.extend(std::iter::repeat_n(0.0, extra));
+        }
+        widened.extend_from_slice(&values[first.end..]);
+        widened
+    }
+
     pub fn tensors(&self) -> &[Tensor] {
         &self.tensors
     }
@@ -320,8 +343,34 @@ fn tensor_layout(sizes: &[usize]) -> Vec<Tensor> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn appended_inputs_weigh_nothing_and_the_old_ones_keep_their_weights() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mlp = Mlp::new(&[4, 8, 3], Activation::Elu, 1.0, &mut rng);
+        let wide = mlp.with_inputs_appended(2);
+        assert_eq!(wide.sizes(), &[6, 8, 3]);
+        let input: Vec<f32> = (0..2 * 4).map(|_| rng.random_range(-2.0..2.0)).collect();
+        let mut wide_input = Vec::new();
+        for row in input.chunks(4) {
+            wide_input.extend_from_slice(row);
+            wide_input.extend([rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0)]);
+        }
+        let (mut narrow_ws, mut wide_ws) = (Workspace::default(), Workspace::default());
+        let narrow_out = mlp.forward(&input, 2, &mut narrow_ws, 1);
+        let wide_out = wide.forward(&wide_input, 2, &mut wide_ws, 1);
+        assert_eq!(narrow_out, wide_out, "the new inputs changed the output");
+        // Weight row j of the first layer: the old row, then zeros; every later tensor unchanged.
+        let (old, new) = (&mlp.params()[..4 * 8], &wide.params()[..6 * 8]);
+        for j in 0..8 {
+            assert_eq!(&new[6 * j..6 * j + 4], &old[4 * j..4 * j + 4]);
+            assert_eq!(&new[6 * j + 4..6 * j + 6], &[0.0, 0.0]);
+        }
+        assert_eq!(&wide.params()[6 * 8..], &mlp.params()[4 * 8..]);
+    }
 
     /// Loss = sum(c * y) for fixed random c, in f64.
     fn loss(net: &Mlp, x: &[f32], batch: usize, c: &[f32]) -> f64 {

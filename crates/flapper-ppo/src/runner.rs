@@ -86,7 +86,11 @@ impl<E: VecEnv> Trainer<E> {
             Start::InitFrom(source) => {
                 // The source is checked before the folder is made, so that a refused start leaves nothing.
                 RunFolder::check_new(dir)?;
-                let loaded = checkpoint::load(source)?;
+                let mut loaded = checkpoint::load(source)?;
+                let extra = env.appendable_inputs();
+                if extra > 0 && loaded.info.observation_size + extra == o {
+                    loaded = loaded.with_inputs_appended(extra);
+                }
                 loaded.check_layout(source, o, a)?;
                 let folder = RunFolder::create(dir, &config_toml)?;
                 (folder, learner_from(loaded, ppo_config, &runner))

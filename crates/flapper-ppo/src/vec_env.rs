@@ -30,6 +30,12 @@ pub trait VecEnv {
     fn observation_size(&self) -> usize;
     fn action_size(&self) -> usize;
 
+    /// How many of the observation's last numbers a policy trained without them may be given, weighted
+    /// 0, when a run starts from its file (`Start::InitFrom`): inputs that only add to what it saw.
+    fn appendable_inputs(&self) -> usize {
+        0
+    }
+
     /// Applies one action per environment (`num_envs() * action_size()` numbers, environment by
     /// environment). Episodes that end are reset at once: the next observation is the new episode's.
     fn step(&mut self, actions: &[f32]) -> Result<(), EnvError>;

@@ -111,6 +111,16 @@ pub enum OscillatorA2 {
 pub struct ObservationConfig {
     pub history_frames: usize,
     pub lookahead_steps: usize,
+    /// Not the paper's: above 0, a clock of this frequency (Hz) appended to the observation as the sine
+    /// and cosine of its phase, which advances with the reference's step, so that a stroke can follow
+    /// a rhythm of its own instead of the closed loop's. 0 (the default) leaves it out, and out of a
+    /// written config.
+    #[serde(skip_serializing_if = "is_default_clock_hz")]
+    pub clock_hz: f64,
+}
+
+fn is_default_clock_hz(value: &f64) -> bool {
+    *value == ObservationConfig::default().clock_hz
 }
 
 /// Paper III-D: r = 0.5 r_pos + 0.1 r_rate + 0.2 r_level + 0.05 r_energy. The paper gives the weights;
@@ -226,6 +236,10 @@ fn is_default_glide_hold_scale_deg(value: &f64) -> bool {
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
 /// and below `reward.energy_min_speed_mps` the energy's price.
 pub const SPEED_RAMP_MPS: f64 = 0.5;
+
+/// The fastest clock (`observation.clock_hz`) a config may ask for: well under the 25 Hz a 50 Hz policy
+/// can still tell from its samples.
+pub const CLOCK_MAX_HZ: f64 = 20.0;
 
 /// The share of a per-step weight kept at `speed` (m/s) by a floor of `min_speed`: 1 at or above it,
 /// falling linearly to 0 over the [`SPEED_RAMP_MPS`] below it; 1 at every speed where
@@ -378,7 +392,7 @@ impl Default for ControlConfig {
 
 impl Default for ObservationConfig {
     fn default() -> Self {
-        Self { history_frames: 25, lookahead_steps: 30 }
+        Self { history_frames: 25, lookahead_steps: 30, clock_hz: 0.0 }
     }
 }
 
@@ -603,6 +617,7 @@ impl TaskConfig {
             ("reference.level_probability", f.level_probability, 0.0, 1.0),
             ("reference.level_duration_s", f.level_duration_s, 0.1, 600.0),
             ("control.filter_cutoff_hz", self.control.filter_cutoff_hz, 0.01, 1000.0),
+            ("observation.clock_hz", self.observation.clock_hz, 0.0, CLOCK_MAX_HZ),
             ("control.action_scale", self.control.action_scale, 1e-6, 1.0),
             ("control.differential_flap", self.control.differential_flap, 0.0, 1.0),
             ("control.flap_amplitude_max", self.control.flap_amplitude_max, 0.1, 3.0),
@@ -806,6 +821,10 @@ mod tests {
         assert!(err.contains("reward.glide_hold_weight") && err.contains("-0.2"), "{err}");
         let err = refused("[reward]\nglide_hold_scale_deg = 0\n");
         assert!(err.contains("reward.glide_hold_scale_deg") && err.contains("= 0"), "{err}");
+        for (clock, shown) in [("-1", "= -1"), ("25", "= 25"), ("nan", "= NaN")] {
+            let err = refused(&format!("[observation]\nclock_hz = {clock}\n"));
+            assert!(err.contains("observation.clock_hz") && err.contains(shown), "{err}");
+        }
         let err = refused("[reward]\naction_rate_weight = -1\n");
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = refused("[reward]\nenergy_dive_share = 1.5\n");

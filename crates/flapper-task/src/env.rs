@@ -152,6 +152,8 @@ impl FlightEnv {
         let control = ControlLoop::new(sim, config.control);
         let actions = ActionMap::new(control.sim(), &config.control, control.control_period_s());
         let layout = ObservationLayout::of(&config.observation);
+        let observation =
+            ObservationBuilder::with_clock(layout, config.observation.clock_hz, control.control_period_s());
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);
         check_reference_step(&source, control.control_period_s())?;
@@ -160,7 +162,7 @@ impl FlightEnv {
             config,
             control,
             actions,
-            observation: ObservationBuilder::new(layout),
+            observation,
             source,
             reference: placeholder,
             rng_at_reset: rng.clone(),

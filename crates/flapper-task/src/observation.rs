@@ -11,7 +11,9 @@
 //! The policy sees the last `history_frames` frames, oldest first (25 frames, 450 numbers), then the
 //! next `lookahead_steps` reference points (30 points, 90 numbers), each as the offset from the robot
 //! to the point in the robot's body frame (x forward, y left, z up). 540 in all with the paper's
-//! numbers. [`ObservationLayout::names`] names every index.
+//! numbers. With `[observation] clock_hz` above 0 (not the paper's), two more close it: the sine and
+//! cosine of a clock's phase, 2 pi f dt times the reference's step. [`ObservationLayout::names`] names
+//! every index.
 
 use std::collections::VecDeque;
 
@@ -31,16 +33,36 @@ pub type Frame = [f32; FRAME_SIZE];
 pub struct ObservationLayout {
     pub history_frames: usize,
     pub lookahead_steps: usize,
+    /// Whether the clock's sine and cosine close the observation.
+    pub clock: bool,
 }
+
+/// Numbers the clock adds at the end of the observation.
+pub const CLOCK_SIZE: usize = 2;
 
 impl ObservationLayout {
     /// The layout a task config asks for.
     pub fn of(config: &crate::config::ObservationConfig) -> Self {
-        Self { history_frames: config.history_frames, lookahead_steps: config.lookahead_steps }
+        Self {
+            history_frames: config.history_frames,
+            lookahead_steps: config.lookahead_steps,
+            clock: config.clock_hz > 0.0,
+        }
+    }
+
+    /// The paper's layout: 25 frames of history, 30 points ahead, no clock.
+    pub fn paper() -> Self {
+        Self::of(&crate::config::ObservationConfig::default())
     }
 
     pub fn size(&self) -> usize {
-        self.history_frames * FRAME_SIZE + 3 * self.lookahead_steps
+        self.lookahead_start() + 3 * self.lookahead_steps + self.clock_size()
+    }
+
+    /// Numbers at the end that a policy trained without them can be given with zero weights
+    /// (the clock's; 0 without it).
+    pub fn clock_size(&self) -> usize {
+        if self.clock { CLOCK_SIZE } else { 0 }
     }
 
     /// Index of the first lookahead number.
@@ -61,6 +83,9 @@ impl ObservationLayout {
         }
         for ahead in 1..=self.lookahead_steps {
             names.extend(["x_body_m", "y_body_m", "z_body_m"].map(|axis| format!("ahead+{ahead:02}.{axis}")));
+        }
+        if self.clock {
+            names.extend(["clock.sin", "clock.cos"].map(String::from));
         }
         names
     }
@@ -85,11 +110,20 @@ pub fn read_frame(sim: &Simulator, previous_action: &[f32; ACTION_SIZE]) -> Fram
 pub struct ObservationBuilder {
     layout: ObservationLayout,
     history: VecDeque<Frame>,
+    /// The clock's phase advance per reference step (rad; 0 without a clock).
+    clock_radians_per_step: f64,
 }
 
 impl ObservationBuilder {
+    /// A builder without a clock.
     pub fn new(layout: ObservationLayout) -> Self {
-        Self { layout, history: VecDeque::with_capacity(layout.history_frames) }
+        Self::with_clock(layout, 0.0, 0.0)
+    }
+
+    /// A builder whose clock (if `layout` has one) runs at `clock_hz` over reference steps of `step_s`.
+    pub fn with_clock(layout: ObservationLayout, clock_hz: f64, step_s: f64) -> Self {
+        let clock_radians_per_step = if layout.clock { std::f64::consts::TAU * clock_hz * step_s } else { 0.0 };
+        Self { layout, history: VecDeque::with_capacity(layout.history_frames), clock_radians_per_step }
     }
 
     pub fn layout(&self) -> ObservationLayout {
@@ -130,11 +164,16 @@ impl ObservationBuilder {
         for (chunk, frame) in out.chunks_exact_mut(FRAME_SIZE).zip(&self.history) {
             chunk.copy_from_slice(frame);
         }
-        let lookahead = &mut out[self.layout.lookahead_start()..];
+        let (lookahead, clock) = out[self.layout.lookahead_start()..].split_at_mut(3 * self.layout.lookahead_steps);
         let to_body = orientation.inverse();
         for (i, slot) in lookahead.chunks_exact_mut(3).enumerate() {
             let offset = to_body * (reference.target(step + 1 + i) - position);
             slot.copy_from_slice(&[offset.x as f32, offset.y as f32, offset.z as f32]);
+        }
+        if self.layout.clock {
+            // Taken modulo one turn in f64 before the sine, so that it stays accurate however long the path.
+            let phase = (step as f64 * self.clock_radians_per_step).rem_euclid(std::f64::consts::TAU);
+            clock.copy_from_slice(&[phase.sin() as f32, phase.cos() as f32]);
         }
     }
 }

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::action::ACTION_SIZE;
 use crate::config::TaskConfig;
 use crate::env::{EnvSnapshot, EpisodeInfo, FlightEnv, ReferenceSource};
+use crate::observation::ObservationLayout;
 use crate::reward::RewardTerms;
 use crate::termination::EpisodeEnd;
 
@@ -28,6 +29,7 @@ pub struct VecEnvSnapshot {
 pub struct FlightVecEnv {
     envs: Vec<FlightEnv>,
     pool: rayon::ThreadPool,
+    observation_layout: ObservationLayout,
     observation_size: usize,
     observations: Vec<f32>,
     /// Each episode that ended at the last step: its last observation, to bootstrap a truncated
@@ -58,6 +60,7 @@ impl FlightVecEnv {
         let envs = (0..count)
             .map(|index| FlightEnv::new(robot, config.clone(), source.clone(), seed, index))
             .collect::<Result<Vec<_>, _>>()?;
+        let observation_layout = ObservationLayout::of(&config.observation);
         let observation_size = envs.first().map_or(0, |e| e.observation_layout().size());
         let pool =
             rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| ModelError::InvalidValue {
@@ -68,6 +71,7 @@ impl FlightVecEnv {
         let mut vec_env = Self {
             envs,
             pool,
+            observation_layout,
             observation_size,
             observations: vec![0.0; count * observation_size],
             final_observations: vec![0.0; count * observation_size],
@@ -113,6 +117,11 @@ impl FlightVecEnv {
 
     pub fn action_size(&self) -> usize {
         ACTION_SIZE
+    }
+
+    /// The observation's layout (every environment's is the same).
+    pub fn observation_layout(&self) -> ObservationLayout {
+        self.observation_layout
     }
 
     /// Steps every environment with its slice of `actions` (`len() * 5` numbers). Finished episodes

@@ -53,7 +53,8 @@ fn stroke_priced(config: TaskConfig, reference: Arc<Reference>) -> (f64, flapper
 
 #[test]
 fn observation_has_540_named_numbers() {
-    let layout = ObservationLayout { history_frames: 25, lookahead_steps: 30 };
+    let layout = ObservationLayout { history_frames: 25, lookahead_steps: 30, clock: false };
+    assert_eq!(layout, ObservationLayout::paper());
     assert_eq!(FRAME_SIZE, 18);
     assert_eq!(layout.size(), 540);
     let names = layout.names();
@@ -64,6 +65,34 @@ fn observation_has_540_named_numbers() {
     assert_eq!(names[449], "t-0.action.tail_pitch");
     assert_eq!(names[450], "ahead+01.x_body_m");
     assert_eq!(names[539], "ahead+30.z_body_m");
+}
+
+#[test]
+fn a_clock_closes_the_observation_turning_at_its_frequency_and_leaves_the_rest_as_it_was() {
+    let run = |clock_hz: f64, steps: usize| {
+        let mut config = exact_start(TaskConfig::default());
+        config.observation.clock_hz = clock_hz;
+        let mut env = FlightEnv::new(&robot(), Arc::new(config), ReferenceSource::Fixed(northbound()), 1, 0).unwrap();
+        let mut seen = Vec::new();
+        for _ in 0..steps {
+            env.step(&[0.5, 0.0, 0.5, 0.0, -0.2]);
+            let mut obs = vec![0.0f32; env.observation_layout().size()];
+            env.observe(&mut obs);
+            seen.push(obs);
+        }
+        (env.observation_layout(), seen)
+    };
+    let (plain_layout, plain) = run(0.0, 12);
+    let (layout, clocked) = run(5.0, 12);
+    assert_eq!((plain_layout.size(), layout.size()), (540, 542));
+    assert_eq!(&layout.names()[540..], &["clock.sin", "clock.cos"]);
+    for (k, (without, with)) in plain.iter().zip(&clocked).enumerate() {
+        assert_eq!(&with[..540], &without[..], "step {k}: the clock changed the flight or the other numbers");
+        // After k + 1 steps of 20 ms at 5 Hz the phase is 0.2 pi (k + 1): a turn every 10 steps.
+        let phase = 0.2 * std::f64::consts::PI * (k + 1) as f64;
+        let (sin, cos) = (with[540] as f64, with[541] as f64);
+        assert!((sin - phase.sin()).abs() < 1e-6 && (cos - phase.cos()).abs() < 1e-6, "step {k}: {sin} {cos}");
+    }
 }
 
 #[test]

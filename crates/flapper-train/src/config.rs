@@ -108,12 +108,17 @@ mod tests {
         assert_eq!(again, c);
         assert!(!c.to_toml().contains("smoothness_norm"), "the default norm is left out of a written config");
         assert!(!c.to_toml().contains("smoothness_action_scale"), "so are the default shares");
-        for key in ["flap_rate", "flap_max_hz", "glide_hold"] {
-            assert!(!c.to_toml().contains(key), "{key}: the flap's and the glide's keys at their defaults too");
+        for key in ["flap_rate", "flap_max_hz", "glide_hold", "clock_hz"] {
+            assert!(
+                !c.to_toml().contains(key),
+                "{key}: the flap's, the glide's and the clock's keys at their defaults too"
+            );
         }
-        let glide = "[task.reward]\nglide_hold_weight = 0.3\nglide_hold_scale_deg = 15\nflap_rate_weight = 0.1\n";
+        let glide = "[task.reward]\nglide_hold_weight = 0.3\nglide_hold_scale_deg = 15\nflap_rate_weight = 0.1\n\
+                     [task.observation]\nclock_hz = 5.3\n";
         let glide = TrainConfig::from_toml(glide, "g.toml", None).unwrap();
         assert_eq!((glide.task.reward.glide_hold_weight, glide.task.reward.glide_hold_scale_deg), (0.3, 15.0));
+        assert_eq!(glide.task.observation.clock_hz, 5.3);
         assert_eq!(TrainConfig::from_toml(&glide.to_toml(), "g2.toml", None).unwrap(), glide);
         let euclidean = TrainConfig::from_toml("[ppo]\nsmoothness_norm = \"euclidean\"\n", "e.toml", None).unwrap();
         assert_eq!(euclidean.ppo.smoothness_norm, flapper_ppo::config::SmoothnessNorm::Euclidean);

@@ -92,6 +92,12 @@ impl VecEnv for FlightEnvs {
         self.inner.action_size()
     }
 
+    /// The clock's two numbers (`[task.observation] clock_hz`): a policy trained without them hears it
+    /// with zero weights at first.
+    fn appendable_inputs(&self) -> usize {
+        self.inner.observation_layout().clock_size()
+    }
+
     fn step(&mut self, actions: &[f32]) -> Result<(), EnvError> {
         self.inner.step(actions)?;
         let per_env = self.logged_terms();

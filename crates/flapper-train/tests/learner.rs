@@ -248,6 +248,53 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     );
     assert!(source.policy.log_std.iter().all(|s| (s.exp() - 0.25).abs() > 1e-3), "the source's noise differs");
     assert_eq!(trainer.ppo().policy.actor, source.policy.actor, "the weights are the source's");
+    // ... and with a clock in the observation (`[task.observation] clock_hz`), from the source given the
+    // clock's two numbers with zero weights: the same networks on its 540, Adam's moments for the new 0.
+    let mut checkpoints: Vec<PathBuf> = std::fs::read_dir(dir.join("checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "safetensors"))
+        .collect();
+    checkpoints.sort();
+    let newest = checkpoint::load(checkpoints.last().unwrap()).unwrap();
+    let mut clocked_config = small_flight_config(2, 1);
+    clocked_config.task.observation.clock_hz = 5.3;
+    let clocked = scratch_dir("clocked");
+    let trainer =
+        flight_trainer(&robot, &clocked_config, &clocked, Start::InitFrom(checkpoints.last().unwrap().clone()))
+            .unwrap();
+    let (policy, optimizer) = (&trainer.ppo().policy, &trainer.ppo().optimizer);
+    assert_eq!((policy.observation_size(), policy.actor.sizes()), (542, &[542, 16, 5][..]));
+    let source_optimizer = newest.optimizer.as_ref().unwrap();
+    for (new, old, new_adam, old_adam) in [
+        (&policy.actor, &newest.policy.actor, &optimizer.actor, &source_optimizer.actor),
+        (&policy.critic, &newest.policy.critic, &optimizer.critic, &source_optimizer.critic),
+    ] {
+        for (j, (new_row, old_row)) in new.params()[..542 * 16].chunks(542).zip(old.params().chunks(540)).enumerate() {
+            assert_eq!(&new_row[..540], old_row, "row {j} of the first weight");
+            assert_eq!(&new_row[540..], &[0.0, 0.0], "row {j}: the clock's weights");
+        }
+        assert_eq!(&new.params()[542 * 16..], &old.params()[540 * 16..]);
+        let moments =
+            [(&new_adam.first_moment, &old_adam.first_moment), (&new_adam.second_moment, &old_adam.second_moment)];
+        for (new_moment, old_moment) in moments {
+            assert_eq!(new_moment.len(), new.params().len());
+            assert!(new_moment[..542 * 16].chunks(542).all(|row| row[540..] == [0.0, 0.0]));
+            assert_eq!(&new_moment[542 * 16..], &old_moment[540 * 16..]);
+        }
+    }
+    assert_eq!(&policy.normalizer.mean[..540], &newest.policy.normalizer.mean[..]);
+    assert_eq!(
+        (&policy.normalizer.mean[540..], &policy.normalizer.variance[540..]),
+        (&[0.0, 0.0][..], &[1.0, 1.0][..])
+    );
+    // A source of another size is still refused: only the clock's two numbers may be added.
+    let mut longer_config = clocked_config.clone();
+    longer_config.task.observation.lookahead_steps = 31;
+    let longer = scratch_dir("longer");
+    let err =
+        flight_trainer(&robot, &longer_config, &longer, Start::InitFrom(dir.join("policy.safetensors"))).err().unwrap();
+    assert!(err.to_string().contains("540 observations") && err.to_string().contains("545 observations"), "{err}");
     config.runner.init_from_noise_std = Some(f32::NAN);
     assert!(config.runner.validate(&config.ppo).unwrap_err().to_string().contains("runner.init_from_noise_std"));
     // A second trainer on a live run's folder is refused while the first holds it.
@@ -314,7 +361,7 @@ fn runs_refuse_to_overwrite_and_checkpoints_are_checked() {
     );
     assert!(loaded.optimizer.is_none() && loaded.info.rng.is_none() && loaded.environments.is_none());
     assert_eq!((loaded.policy.actor, loaded.info.iteration), (saved.policy.actor, saved.info.iteration));
-    for d in [dir, pendulum_dir, other, chained, renoised] {
+    for d in [dir, pendulum_dir, other, chained, renoised, clocked, longer] {
         std::fs::remove_dir_all(d).ok();
     }
 }
