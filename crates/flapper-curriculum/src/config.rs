@@ -812,6 +812,23 @@ task = { stage = 2 }
         assert!(unpaid == priced.task.reward && paid.ppo == priced.ppo, "only the glide's pay differs");
         assert!(glide_hold.stages[..5] == flap_rate.stages[..5]);
         check_budget(&glide_hold, "curriculum-glide-hold-stage.toml");
+
+        // cks: gz30's curriculum with a 5.3 Hz clock in every stage's observation; nothing else changed.
+        use flapper_task::config::{ObservationConfig, TaskConfig};
+        let clock = shipped("experiments/curriculum-clock.toml");
+        for (number, unclocked) in (1..=6).zip(&glide_hold.stages) {
+            let clocked = clock.stage_train_config(number).unwrap();
+            assert_eq!(clocked.task.observation.clock_hz, 5.3, "stage {number}");
+            let without = TrainConfig {
+                task: TaskConfig {
+                    observation: ObservationConfig { clock_hz: 0.0, ..clocked.task.observation.clone() },
+                    ..clocked.task.clone()
+                },
+                ..clocked
+            };
+            assert_eq!(without, glide_hold.stage_train_config(number).unwrap(), "stage {number} ({})", unclocked.name);
+        }
+        check_budget(&clock, "curriculum-clock.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.

@@ -152,8 +152,7 @@ impl FlightEnv {
         let control = ControlLoop::new(sim, config.control);
         let actions = ActionMap::new(control.sim(), &config.control, control.control_period_s());
         let layout = ObservationLayout::of(&config.observation);
-        let observation =
-            ObservationBuilder::with_clock(layout, config.observation.clock_hz, control.control_period_s());
+        let observation = ObservationBuilder::new(layout, config.observation.clock_hz, control.control_period_s());
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(index as u64);
         check_reference_step(&source, control.control_period_s())?;

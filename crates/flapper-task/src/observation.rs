@@ -115,13 +115,8 @@ pub struct ObservationBuilder {
 }
 
 impl ObservationBuilder {
-    /// A builder without a clock.
-    pub fn new(layout: ObservationLayout) -> Self {
-        Self::with_clock(layout, 0.0, 0.0)
-    }
-
-    /// A builder whose clock (if `layout` has one) runs at `clock_hz` over reference steps of `step_s`.
-    pub fn with_clock(layout: ObservationLayout, clock_hz: f64, step_s: f64) -> Self {
+    /// A builder for `layout`, whose clock (if it has one) runs at `clock_hz` over reference steps of `step_s`.
+    pub fn new(layout: ObservationLayout, clock_hz: f64, step_s: f64) -> Self {
         let clock_radians_per_step = if layout.clock { std::f64::consts::TAU * clock_hz * step_s } else { 0.0 };
         Self { layout, history: VecDeque::with_capacity(layout.history_frames), clock_radians_per_step }
     }
