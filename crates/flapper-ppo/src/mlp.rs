@@ -180,8 +180,8 @@ impl Mlp {
         Self::with_params(&sizes, self.activation, params).expect("widened to the widened sizes")
     }
 
-    /// `values`, laid out as this MLP's parameters (e.g. Adam's moments), laid out for
-    /// [`Mlp::with_inputs_appended`]: the first weight's rows each gain `extra` zeros.
+    /// `values` in the layout of this MLP's parameters (e.g. Adam's moments), rearranged for
+    /// [`Mlp::with_inputs_appended`]: each row of the first weight gains `extra` zeros.
     pub fn values_with_inputs_appended(&self, values: &[f32], extra: usize) -> Vec<f32> {
         assert_eq!(values.len(), self.params.len(), "not laid out as this MLP's parameters");
         let first = self.tensors[0].range.clone();
