@@ -65,14 +65,11 @@ impl ActorCritic {
     /// through the normalizer as they come (mean 0, variance 1): it acts and values as before, and
     /// training can learn to use them.
     pub fn with_inputs_appended(&self, extra: usize) -> Self {
-        let mut normalizer = self.normalizer.clone();
-        normalizer.mean.extend(std::iter::repeat_n(0.0, extra));
-        normalizer.variance.extend(std::iter::repeat_n(1.0, extra));
         Self {
             actor: self.actor.with_inputs_appended(extra),
             critic: self.critic.with_inputs_appended(extra),
             log_std: self.log_std.clone(),
-            normalizer,
+            normalizer: self.normalizer.with_features_appended(extra),
         }
     }
 

@@ -25,6 +25,16 @@ impl Normalizer {
         self.mean.len()
     }
 
+    /// These statistics with `extra` features after their own, each as [`Normalizer::new`] starts one.
+    pub fn with_features_appended(&self, extra: usize) -> Self {
+        let fresh = Self::new(extra);
+        Self {
+            mean: [&self.mean[..], &fresh.mean].concat(),
+            variance: [&self.variance[..], &fresh.variance].concat(),
+            count: self.count,
+        }
+    }
+
     /// Merges a batch of `rows.len() / size()` observations into the statistics (Chan et al.'s
     /// parallel update, exact for any batch split).
     pub fn update(&mut self, rows: &[f32]) {
