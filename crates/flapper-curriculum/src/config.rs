@@ -83,6 +83,14 @@ pub struct StageConfig {
     /// first.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub optional: bool,
+    /// The iterations this stage keeps back from the extensions and restarts of the stages before it
+    /// (never from their own budgets): absent, the fewest it needs to hand over
+    /// ([`StageConfig::least_iterations`]), or none for an optional stage. A refinement whose result
+    /// comes late and swings from checkpoint to checkpoint (the glide) can keep the budget that an
+    /// extension of the stage before it would otherwise spend. At most its `max_iterations`; for a required
+    /// stage at least its least iterations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reserved_iterations: Option<usize>,
     /// Judge and hand over, at each validation, the mean of the weights of the last this many
     /// checkpoints of the stage (the one just saved and those before it; fewer early in the stage)
     /// instead of the checkpoint alone: stochastic weight averaging, for a fine-tuning stage whose
@@ -145,13 +153,19 @@ impl StageConfig {
     /// gate's `rms_sought`): what it trains and how it is judged.
     pub fn as_trained(&self) -> StageConfig {
         let gate = Gate { rms_sought: false, ..self.gate.clone() };
-        StageConfig { restart_noise_std: None, optional: false, gate, ..self.clone() }
+        StageConfig { restart_noise_std: None, optional: false, reserved_iterations: None, gate, ..self.clone() }
     }
 
     /// The fewest iterations the stage can hand over after: one validation interval, or its gate's
     /// `min_iterations` where that is later (a budget that leaves less stops the run before the stage).
     pub fn least_iterations(&self) -> usize {
         self.gate.min_iterations.max(self.validate_every)
+    }
+
+    /// What the stage keeps back from the extensions and restarts of the stages before it
+    /// (`reserved_iterations`, or by default its least iterations, none if optional).
+    pub fn kept_back_iterations(&self) -> usize {
+        self.reserved_iterations.unwrap_or(if self.optional { 0 } else { self.least_iterations() })
     }
 }
 
@@ -398,6 +412,16 @@ impl CurriculumConfig {
                     "average_checkpoints must be in [1, {MAX_AVERAGED_CHECKPOINTS}], got {count}"
                 )));
             }
+            if let Some(reserved) = stage.reserved_iterations {
+                let least = if stage.optional { 0 } else { stage.least_iterations() };
+                if !(least..=stage.max_iterations).contains(&reserved) {
+                    return Err(bad(format!(
+                        "reserved_iterations must be in [{least}, {}], got {reserved} (at most the stage's max_iterations{})",
+                        stage.max_iterations,
+                        if stage.optional { "" } else { ", at least the iterations it needs to hand over" }
+                    )));
+                }
+            }
             let required_after = config.stages[number..].iter().any(|later| !later.optional);
             if stage.optional && (number == 1 || required_after) {
                 return Err(bad(format!(
@@ -478,8 +502,9 @@ impl CurriculumConfig {
     /// The iterations stage `number` may add to its budget once it has trained `trained` of them (its
     /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
     /// run's `max_env_steps` leaves after the fewest iterations every later stage needs to hand over
-    /// ([`StageConfig::least_iterations`]; an optional stage holds nothing back: a required stage meeting
-    /// its gate matters more than the refinement after it); a multiple of `validate_every` (0: no room).
+    /// ([`StageConfig::kept_back_iterations`]: by default its least iterations, and an optional stage holds
+    /// nothing back, a required stage meeting its gate mattering more than the refinement after it, unless
+    /// its `reserved_iterations` says otherwise); a multiple of `validate_every` (0: no room).
     /// Keeping back the later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
     /// stages' caps add up to more than the run's budget by design, so a heavier robot's stage 2 still
     /// improving at its 400th iteration stopped the run with 27 M of the 30 M steps unspent.
@@ -497,8 +522,8 @@ impl CurriculumConfig {
         let mut room = stage.max_iterations / 2;
         if let Some(total) = self.max_env_steps {
             let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
-            for later in (number + 1..=self.stages.len()).filter(|&k| !self.stages[k - 1].optional) {
-                reserved += self.stages[later - 1].least_iterations() as u64 * per_iteration(later)?;
+            for later in number + 1..=self.stages.len() {
+                reserved += self.stages[later - 1].kept_back_iterations() as u64 * per_iteration(later)?;
             }
             room = room.min((total.saturating_sub(reserved) / per_iteration(number)?) as usize);
         }
@@ -696,6 +721,26 @@ task = { stage = 2 }
         // add half its budget: stages 3-5 keep 2000 + 300 + 300 iterations.
         assert_eq!(five.extension_iterations(2, 126 * 6144, 400).unwrap(), 200);
 
+        // A later stage's reserved_iterations keep its budget from the extensions of the stages before it
+        // (never from their own budgets). Seed 1's shipped stages 1-4 trained 2504 iterations and its stage
+        // 5 its whole 1200 without the gate: stage 5 adds its half budget, 600, while an optional sixth
+        // stage keeps nothing back, and the 7.24 M steps the run leaves go to the sixth stage (1175 of them
+        // in whole validations of 25) when it reserves them; a reservation of 1100 leaves stage 5 one
+        // validation interval more (50 of the 78 left).
+        let sixth = shipped("experiments/curriculum-glide-slope-stage.toml");
+        let seed1_before_stage5 = 2504 * 6144;
+        assert_eq!(sixth.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600, "nothing kept back");
+        let mut reserving = sixth.clone();
+        reserving.stages[5].max_iterations = 1175;
+        reserving.stages[5].reserved_iterations = Some(1175);
+        assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 0);
+        assert_eq!(reserving.stage_iterations(5, seed1_before_stage5).unwrap(), 1200, "its own budget is kept");
+        assert_eq!(reserving.stage_iterations(6, seed1_before_stage5 + 1200 * 6144).unwrap(), 1175);
+        reserving.stages[5].reserved_iterations = Some(1100);
+        assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 50);
+        let unreserved = StageConfig { reserved_iterations: None, ..reserving.stages[5].clone() };
+        assert_eq!(unreserved.as_trained(), reserving.stages[5].as_trained(), "what it trains is the same");
+
         let oscillator = shipped("experiments/curriculum-oscillator.toml");
         assert_eq!(task_stages(&oscillator), [1, 2, 3, 3, 4]);
         let smoothness: Vec<f32> =
@@ -829,6 +874,17 @@ task = { stage = 2 }
             assert_eq!(without, glide_hold.stage_train_config(number).unwrap(), "stage {number} ({})", unclocked.name);
         }
         check_budget(&clock, "curriculum-clock.toml");
+
+        // gF's sixth stage keeping the budget stage 5's extension spent: the same stages but for the glide
+        // stage's budget, its reservation and its validation interval.
+        let reserved = shipped("experiments/curriculum-glide-stage-reserved.toml");
+        let sixth = shipped("experiments/curriculum-glide-stage.toml");
+        assert!(reserved.stages[..5] == sixth.stages[..5] && reserved.max_env_steps == sixth.max_env_steps);
+        let glide = &reserved.stages[5];
+        assert_eq!((glide.max_iterations, glide.reserved_iterations, glide.validate_every), (1175, Some(1175), 25));
+        assert_eq!(reserved.stage_train_config(6).unwrap().task, sixth.stage_train_config(6).unwrap().task);
+        assert_eq!(reserved.extension_iterations(5, 2504 * 6144, 1200).unwrap(), 0, "seed 1's stage 5 is not extended");
+        check_budget(&reserved, "curriculum-glide-stage-reserved.toml");
     }
 
     /// Writes `files` (name, text) into a fresh folder and returns it.
@@ -963,6 +1019,15 @@ task = { stage = 3 }
             let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\naverage_checkpoints = {count}"));
             assert!(
                 e.contains("stage 2") && e.contains("average_checkpoints") && e.contains(&count.to_string()),
+                "{e}"
+            );
+        }
+        // Stage 2 (required, max_iterations 2, least 1) keeps back 1 or 2; more than its budget, or less than
+        // it needs to hand over, is refused.
+        for reserved in [0, 3] {
+            let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\nreserved_iterations = {reserved}"));
+            assert!(
+                e.contains("stage 2") && e.contains(&format!("reserved_iterations must be in [1, 2], got {reserved}")),
                 "{e}"
             );
         }
