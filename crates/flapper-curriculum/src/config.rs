@@ -727,10 +727,10 @@ task = { stage = 2 }
         // stage keeps nothing back, and the 7.24 M steps the run leaves go to the sixth stage (1175 of them
         // in whole validations of 25) when it reserves them; a reservation of 1100 leaves stage 5 one
         // validation interval more (50 of the 78 left).
-        let sixth = shipped("experiments/curriculum-glide-slope-stage.toml");
+        let slope_sixth = shipped("experiments/curriculum-glide-slope-stage.toml");
         let seed1_before_stage5 = 2504 * 6144;
-        assert_eq!(sixth.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600, "nothing kept back");
-        let mut reserving = sixth.clone();
+        assert_eq!(slope_sixth.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600, "nothing kept back");
+        let mut reserving = slope_sixth.clone();
         reserving.stages[5].max_iterations = 1175;
         reserving.stages[5].reserved_iterations = Some(1175);
         assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 0);
@@ -878,11 +878,11 @@ task = { stage = 2 }
         // gF's sixth stage keeping the budget stage 5's extension spent: the same stages but for the glide
         // stage's budget, its reservation and its validation interval.
         let reserved = shipped("experiments/curriculum-glide-stage-reserved.toml");
-        let sixth = shipped("experiments/curriculum-glide-stage.toml");
-        assert!(reserved.stages[..5] == sixth.stages[..5] && reserved.max_env_steps == sixth.max_env_steps);
+        let gf_sixth = shipped("experiments/curriculum-glide-stage.toml");
+        assert!(reserved.stages[..5] == gf_sixth.stages[..5] && reserved.max_env_steps == gf_sixth.max_env_steps);
         let glide = &reserved.stages[5];
         assert_eq!((glide.max_iterations, glide.reserved_iterations, glide.validate_every), (1175, Some(1175), 25));
-        assert_eq!(reserved.stage_train_config(6).unwrap().task, sixth.stage_train_config(6).unwrap().task);
+        assert_eq!(reserved.stage_train_config(6).unwrap().task, gf_sixth.stage_train_config(6).unwrap().task);
         assert_eq!(reserved.extension_iterations(5, 2504 * 6144, 1200).unwrap(), 0, "seed 1's stage 5 is not extended");
         check_budget(&reserved, "curriculum-glide-stage-reserved.toml");
     }
