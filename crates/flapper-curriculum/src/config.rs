@@ -165,7 +165,13 @@ impl StageConfig {
     /// What the stage keeps back from the extensions and restarts of the stages before it
     /// (`reserved_iterations`, or by default its least iterations, none if optional).
     pub fn kept_back_iterations(&self) -> usize {
-        self.reserved_iterations.unwrap_or(if self.optional { 0 } else { self.least_iterations() })
+        self.reserved_iterations.unwrap_or(self.fewest_kept_back())
+    }
+
+    /// What the stage keeps back without `reserved_iterations`, and the least it may reserve: its least
+    /// iterations, or nothing for an optional stage.
+    fn fewest_kept_back(&self) -> usize {
+        if self.optional { 0 } else { self.least_iterations() }
     }
 }
 
@@ -413,7 +419,7 @@ impl CurriculumConfig {
                 )));
             }
             if let Some(reserved) = stage.reserved_iterations {
-                let least = if stage.optional { 0 } else { stage.least_iterations() };
+                let least = stage.fewest_kept_back();
                 if !(least..=stage.max_iterations).contains(&reserved) {
                     return Err(bad(format!(
                         "reserved_iterations must be in [{least}, {}], got {reserved} (at most the stage's max_iterations{})",
@@ -523,7 +529,10 @@ impl CurriculumConfig {
         if let Some(total) = self.max_env_steps {
             let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
             for later in number + 1..=self.stages.len() {
-                reserved += self.stages[later - 1].kept_back_iterations() as u64 * per_iteration(later)?;
+                let kept = self.stages[later - 1].kept_back_iterations();
+                if kept > 0 {
+                    reserved += kept as u64 * per_iteration(later)?;
+                }
             }
             room = room.min((total.saturating_sub(reserved) / per_iteration(number)?) as usize);
         }
