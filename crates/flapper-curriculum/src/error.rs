@@ -26,7 +26,7 @@ pub enum CurriculumError {
     #[error("another process is running the curriculum in '{0}' (its .lock is held)")]
     Busy(PathBuf),
     #[error(
-        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}.{} Its runs are in '{dir}'",
+        "stage {} ('{}') missed its gate ({}) within {} iterations; its best checkpoint, {best}.{} Its runs are in '{dir}'; what to try next (more budget, another seed, or for a robot of your own a controller fine-tuned from one that flies these references): docs/training.md, \"Training your own robot\"",
         .stopped.stage, .stopped.name, .stopped.gate, .stopped.iterations,
         .stopped.stopped_because.as_ref().map_or(String::new(), |why| format!(" No more iterations: {why}."))
     )]

@@ -163,6 +163,10 @@ fn a_missed_gate_stops_the_run_naming_the_gate_and_the_best_score() {
     let e = run(&dir, &text, None).unwrap_err();
     assert!(e.contains("stage 1 ('cruise') missed its gate"), "{e}");
     assert!(e.contains("at least 100%") && e.contains("best checkpoint") && e.contains("completed 0.0%"), "{e}");
+    assert!(
+        e.contains("what to try next") && e.contains("docs/training.md"),
+        "the message points to the remedies: {e}"
+    );
     assert!(!stage_dir(&dir, 2).exists(), "the run stopped at the missed gate");
     assert!(dir.join("curriculum.svg").exists(), "the figure shows the stage that stopped the run");
     // The summary counts the stage that stopped the run: its steps are in the totals.
