@@ -54,4 +54,13 @@ fn the_gliding_candidates_glide_cheaply_at_a_birds_flap() {
         assert!(glide.energy_ratio < 1.25, "{name}: {:.2} x from the exact start", glide.energy_ratio);
         assert!((4.0..=6.0).contains(&glide.cruise_flap_hz), "{name}: {:.2} Hz", glide.cruise_flap_hz);
     }
+    // policies/experiments/glide-one-command/README.md: its stage's last validation from the exact start:
+    // glide 0.56, 1.10 x (its cruise flap is measured on the cruise reference: 5.83 Hz on 100 starts).
+    let one_command = flight_mode_figures(&robot, &shipped("experiments/glide-one-command")).unwrap();
+    assert!(one_command.glide_fraction >= 0.5, "glide-one-command glides {:.2} of it", one_command.glide_fraction);
+    assert!(
+        one_command.energy_ratio < 1.2,
+        "glide-one-command: {:.2} x from the exact start",
+        one_command.energy_ratio
+    );
 }
