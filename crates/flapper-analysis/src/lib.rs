@@ -48,4 +48,6 @@ pub enum AnalysisError {
     FrontierFile { path: std::path::PathBuf, line: u64, message: String },
     #[error(transparent)]
     Reference(#[from] flapper_task::reference::ReferenceError),
+    #[error("'{0}' is not a named reference (flapper reference --list)")]
+    UnknownReference(String),
 }

@@ -96,13 +96,27 @@ pub fn longitudinal_from_exact_start(
     controller: &TrackingController,
     task: &TaskConfig,
 ) -> Result<EpisodeResult, AnalysisError> {
+    named_from_exact_start(robot, controller, task, "longitudinal")
+}
+
+/// Flies the named reference `name` (`flapper reference --list`) once from its exact start with
+/// `controller`, as far as it gets.
+pub fn named_from_exact_start(
+    robot: &RobotModel,
+    controller: &TrackingController,
+    task: &TaskConfig,
+    name: &str,
+) -> Result<EpisodeResult, AnalysisError> {
     let mut exact = task.clone();
     exact.initial_state.position_offset_m = [0.0; 3];
     exact.initial_state.speed_offset_mps = 0.0;
     exact.initial_state.attitude_offset_deg = 0.0;
     let dt_s = exact.control_period_s(robot.timestep_s());
     let lookahead_s = exact.observation.lookahead_steps as f64 * dt_s;
-    let reference = Arc::new(named("longitudinal", NAMED_START_M, dt_s, lookahead_s).expect("a named reference"));
+    let reference = Arc::new(
+        named(name, NAMED_START_M, dt_s, lookahead_s)
+            .ok_or_else(|| AnalysisError::UnknownReference(name.to_owned()))?,
+    );
     Ok(evaluate_tracking(robot, controller, &exact, reference, 1, 1)?.remove(0))
 }
 

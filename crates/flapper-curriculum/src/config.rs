@@ -253,6 +253,9 @@ pub struct Gate {
     /// 7 Hz filter "limit[s] the viable flapping frequencies to 4-6 Hz".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cruise_flap_hz: Option<[f64; 2]>,
+    /// The flight `cruise_flap_hz` reads the flap's fundamental from ([`CruiseFlapFlight`]).
+    #[serde(default, skip_serializing_if = "CruiseFlapFlight::is_default")]
+    pub cruise_flap_flight: CruiseFlapFlight,
     /// The flight-mode bars (`glide_fraction`, `max_energy_ratio`, `cruise_flap_hz`) are sought, not
     /// required, unless this is set: a stage that has spent its budget (extensions included) with
     /// checkpoints that meet every tracking bar but none that meets the flight-mode bars hands over the
@@ -275,6 +278,28 @@ pub struct Gate {
     pub min_iterations: usize,
 }
 
+/// Which flight a gate's `cruise_flap_hz` reads the flap's fundamental from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CruiseFlapFlight {
+    /// The cruise segment (the first 6 s) of the longitudinal flight the glide and energy bars read:
+    /// one flight for the three bars (every shipped run's gate). Its fundamental falls on a few values
+    /// 0.25 Hz apart and read up to 1.2 Hz from the cruise reference's (docs/experiments.md, "A sharper
+    /// position kernel for the glide stage").
+    #[default]
+    LongitudinalSegment,
+    /// The cruise reference (30 s at 3.8 m/s) flown once more from its exact start, its fundamental
+    /// after the first second as `flapper eval` takes it: the flight the efficient-bird bar reads (the
+    /// eval table's flap_left row on cruise), for one more 30 s flight per validation.
+    CruiseReference,
+}
+
+impl CruiseFlapFlight {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 #[cfg(test)]
 impl Gate {
     /// A gate with only its completion bar, for tests to add bars to.
@@ -290,6 +315,7 @@ impl Gate {
             glide_fraction: None,
             max_energy_ratio: None,
             cruise_flap_hz: None,
+            cruise_flap_flight: CruiseFlapFlight::LongitudinalSegment,
             flight_modes_required: false,
             rms_sought: false,
             min_iterations: 0,
@@ -1079,6 +1105,19 @@ task = { stage = 3 }
         assert!(e.contains("gate.max_energy_ratio") && e.contains("-1"), "{e}");
         let e = err("completed_percent = 0 }", "completed_percent = 0, cruise_flap_hz = [6.0, 4.0] }");
         assert!(e.contains("gate.cruise_flap_hz") && e.contains("[6, 4]"), "{e}");
+        let e = err("completed_percent = 0 }", "completed_percent = 0, cruise_flap_flight = \"cruise\" }");
+        assert!(e.contains("cruise_flap_flight") || e.contains("cruise_reference"), "{e}");
+        let asked = "completed_percent = 0, cruise_flap_hz = [4.0, 6.0], cruise_flap_flight = \"cruise_reference\" }";
+        let c = CurriculumConfig::from_toml(&TINY.replacen("completed_percent = 0 }", asked, 1), "ok.toml").unwrap();
+        assert_eq!(c.stages[0].gate.cruise_flap_flight, CruiseFlapFlight::CruiseReference);
+        assert!(c.to_toml().contains("cruise_flap_flight = \"cruise_reference\""));
+        assert_eq!(CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap(), c);
+        let plain = CurriculumConfig::from_toml(TINY, "ok.toml").unwrap();
+        assert_eq!(plain.stages[0].gate.cruise_flap_flight, CruiseFlapFlight::LongitudinalSegment);
+        assert!(
+            !plain.to_toml().contains("cruise_flap_flight"),
+            "the default is not written: old folders compare equal"
+        );
         let e = err("completed_percent = 0 }", "completed_percent = 0, identification_required = true }");
         assert!(e.contains("identification_required") && e.contains("identification_fit_percent"), "{e}");
         let second = "validation = { references = [\"longitudinal\"], procedural = 1, episodes = 1 }";

@@ -16,13 +16,15 @@ use std::sync::Arc;
 
 use flapper_analysis::AnalysisError;
 use flapper_analysis::frontier;
-use flapper_analysis::modes::{SEGMENTS, longitudinal_from_exact_start, measure_flight_modes};
+use flapper_analysis::modes::{SEGMENTS, longitudinal_from_exact_start, measure_flight_modes, named_from_exact_start};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::TrackingController;
-use flapper_sim::RobotModel;
+use flapper_ppo::ActorCritic;
+use flapper_sim::{ActuatedJoint, RobotModel};
+use flapper_task::TaskConfig;
 
-use crate::config::Gate;
+use crate::config::{CruiseFlapFlight, Gate};
 use crate::validation::ValidationError;
 
 /// What one flight along the longitudinal reference says of a checkpoint's flight modes; NaN where the
@@ -41,11 +43,18 @@ impl ModeFigures {
     pub const NOT_FLOWN: Self = Self { glide_fraction: f64::NAN, energy_ratio: f64::NAN, cruise_flap_hz: f64::NAN };
 }
 
-/// Flies the longitudinal reference from its exact start with the checkpoint and with the scripted gait.
-pub fn flight_mode_figures(robot: &RobotModel, checkpoint: &Path) -> Result<ModeFigures, ValidationError> {
+/// Flies the longitudinal reference from its exact start with the checkpoint and with the scripted gait;
+/// the flap frequency from that flight's cruise segment or from a flight of the cruise reference, as
+/// `flap_flight` says.
+pub fn flight_mode_figures(
+    robot: &RobotModel,
+    checkpoint: &Path,
+    flap_flight: CruiseFlapFlight,
+) -> Result<ModeFigures, ValidationError> {
     let (policy, task) = load_flight_policy(checkpoint)?;
+    let policy = Arc::new(policy);
     let period_s = task.control_period_s(robot.timestep_s());
-    let modes = match measure_flight_modes(robot, Arc::new(policy), &task) {
+    let modes = match measure_flight_modes(robot, Arc::clone(&policy), &task) {
         Ok(modes) => modes,
         Err(AnalysisError::FlightFailed { .. }) => return Ok(ModeFigures::NOT_FLOWN),
         Err(e) => return Err(ValidationError::FlightModes(e.to_string())),
@@ -58,12 +67,30 @@ pub fn flight_mode_figures(robot: &RobotModel, checkpoint: &Path) -> Result<Mode
     let own = flapper_eval::tracking::energy_per_metre_j(&modes.steps, period_s);
     // The ratio as `flapper frontier` takes it; NaN (no bar met) where the scripted gait flew no energy.
     let energy_ratio = frontier::energy_ratio(own, scripted.energy_per_metre_j(period_s)).unwrap_or(f64::NAN);
-    let cruise = SEGMENTS.iter().position(|(name, _, _)| *name == "cruise").expect("the first segment");
-    Ok(ModeFigures {
-        glide_fraction: modes.glide_segment_fraction(),
-        energy_ratio,
-        cruise_flap_hz: modes.report.segments[cruise].flap_fundamental_hz,
-    })
+    let cruise_flap_hz = match flap_flight {
+        CruiseFlapFlight::LongitudinalSegment => {
+            let cruise = SEGMENTS.iter().position(|(name, _, _)| *name == "cruise").expect("the first segment");
+            modes.report.segments[cruise].flap_fundamental_hz
+        }
+        CruiseFlapFlight::CruiseReference => cruise_reference_flap_hz(robot, policy, &task, period_s)?,
+    };
+    Ok(ModeFigures { glide_fraction: modes.glide_segment_fraction(), energy_ratio, cruise_flap_hz })
+}
+
+/// The flap's fundamental over the cruise reference flown from its exact start (after its first
+/// second, as `flapper eval`'s table); NaN where the flight does not reach the reference's end.
+fn cruise_reference_flap_hz(
+    robot: &RobotModel,
+    policy: Arc<ActorCritic>,
+    task: &TaskConfig,
+    period_s: f64,
+) -> Result<f64, ValidationError> {
+    let flight = named_from_exact_start(robot, &TrackingController::Policy(policy), task, "cruise")
+        .map_err(|e| ValidationError::FlightModes(format!("the cruise reference, for the flap frequency: {e}")))?;
+    if !flight.completed() {
+        return Ok(f64::NAN);
+    }
+    Ok(flight.fundamental(ActuatedJoint::FlapLeft, period_s).map_or(f64::NAN, |f| f.frequency_hz))
 }
 
 /// Whether the gate has any flight-mode bar (then every validation measures [`ModeFigures`]).

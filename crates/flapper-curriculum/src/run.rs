@@ -23,7 +23,7 @@ use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
 
-use crate::config::{CurriculumConfig, Gate, StageConfig};
+use crate::config::{CruiseFlapFlight, CurriculumConfig, Gate, StageConfig};
 use crate::error::CurriculumError;
 use crate::figure::write_curriculum_figure;
 use crate::flight_modes::{ModeFigures, flight_mode_figures, gate_asks_flight_modes, meets_flight_mode_bars};
@@ -621,7 +621,11 @@ fn judge(
 ) -> Result<Validated, ValidationError> {
     let began = Instant::now();
     let score = set.judge(robot, path)?;
-    let modes = if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path)?) } else { None };
+    let modes = if gate_asks_flight_modes(gate) {
+        Some(flight_mode_figures(robot, path, gate.cruise_flap_flight)?)
+    } else {
+        None
+    };
     let mut row = Validated { iteration, env_steps, validation_s: 0.0, score, modes, identification_fit_percent: None };
     if gate.identification_fit_percent.is_some() && meets_flight_bars(gate, &row) {
         row.identification_fit_percent = Some(identification_fit_percent(robot, path)?);
@@ -820,7 +824,11 @@ pub fn describe_gate(gate: &Gate) -> String {
         ));
     }
     if let Some([low, high]) = gate.cruise_flap_hz {
-        text.push_str(&format!(", the flap's fundamental in its cruise segment within {low}-{high} Hz"));
+        let flight = match gate.cruise_flap_flight {
+            CruiseFlapFlight::LongitudinalSegment => "in its cruise segment",
+            CruiseFlapFlight::CruiseReference => "along the cruise reference",
+        };
+        text.push_str(&format!(", the flap's fundamental {flight} within {low}-{high} Hz"));
     }
     if let Some(fit) = gate.identification_fit_percent {
         let how =
