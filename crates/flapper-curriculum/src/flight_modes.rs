@@ -6,8 +6,9 @@
 //!
 //! The validation set cannot see these: a checkpoint that tracks the glide segment while flapping
 //! scores as well as one that glides it, and the cheapest of two equally precise checkpoints is not
-//! preferred. One 24 s flight from the exact start (and the scripted gait's once; the cruise reference's
-//! 30 s more where the gate reads the flap frequency there), so every validation can afford it. Energy and frequency swing between neighbouring checkpoints as the glide does, so a
+//! preferred. One 24 s flight from the exact start (and the scripted gait's once; the cruise
+//! reference's 30 s more where the gate reads the flap frequency there), so every validation can
+//! afford it. Energy and frequency swing between neighbouring checkpoints as the glide does, so a
 //! stage that must hand over an efficient controller selects on them here rather than hoping the last
 //! checkpoint is one.
 
