@@ -22,6 +22,16 @@ pub mod phase;
 pub mod robustness;
 pub mod sysid;
 
+/// `task` with its randomized start removed (no position, speed or attitude offset): the one flight
+/// from the reference's exact start that `flapper modes`, `phase` and `sysid` analyse.
+pub(crate) fn exact_start(task: &flapper_task::TaskConfig) -> flapper_task::TaskConfig {
+    let mut exact = task.clone();
+    exact.initial_state.position_offset_m = [0.0; 3];
+    exact.initial_state.speed_offset_mps = 0.0;
+    exact.initial_state.attitude_offset_deg = 0.0;
+    exact
+}
+
 /// What can go wrong in an analysis: a flight the policy cannot make, a fit, an output file.
 #[derive(Debug, thiserror::Error)]
 pub enum AnalysisError {

@@ -34,10 +34,7 @@ pub fn fly_command(
     yaw_rate_degps: f64,
     seconds: f64,
 ) -> Result<EpisodeResult, AnalysisError> {
-    let mut exact = task.clone();
-    exact.initial_state.position_offset_m = [0.0; 3];
-    exact.initial_state.speed_offset_mps = 0.0;
-    exact.initial_state.attitude_offset_deg = 0.0;
+    let exact = crate::exact_start(task);
     let dt_s = exact.control_period_s(robot.timestep_s());
     let lookahead_s = (exact.observation.lookahead_steps + 2) as f64 * dt_s;
     let piece = Piece::Command {

@@ -202,10 +202,7 @@ pub fn fly_records(
     task: &TaskConfig,
     s: &SysidSettings,
 ) -> Result<Vec<FlownRecord>, AnalysisError> {
-    let mut exact = task.clone();
-    exact.initial_state.position_offset_m = [0.0; 3];
-    exact.initial_state.speed_offset_mps = 0.0;
-    exact.initial_state.attitude_offset_deg = 0.0;
+    let exact = crate::exact_start(task);
     let lookahead = exact.observation.lookahead_steps;
     let period_s = exact.control_period_s(robot.timestep_s());
     if (period_s - CONTROL_PERIOD_S).abs() > 1e-12 {

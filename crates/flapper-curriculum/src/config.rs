@@ -250,7 +250,8 @@ pub struct Gate {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_energy_ratio: Option<f64>,
     /// The flap's fundamental in the same flight's cruise segment (or the flight `cruise_flap_flight`
-    /// names) within this range (Hz): the paper's 7 Hz filter "limit[s] the viable flapping frequencies to 4-6 Hz".
+    /// names) within this range (Hz): the paper's 7 Hz filter "limit[s] the viable flapping
+    /// frequencies to 4-6 Hz".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cruise_flap_hz: Option<[f64; 2]>,
     /// The flight `cruise_flap_hz` reads the flap's fundamental from ([`CruiseFlapFlight`]).

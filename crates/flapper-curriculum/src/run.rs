@@ -621,11 +621,10 @@ fn judge(
 ) -> Result<Validated, ValidationError> {
     let began = Instant::now();
     let score = set.judge(robot, path)?;
-    let modes = if gate_asks_flight_modes(gate) {
-        Some(flight_mode_figures(robot, path, gate.cruise_flap_flight)?)
-    } else {
-        None
-    };
+    // The cruise reference is flown for the frequency bar only.
+    let flap_flight =
+        if gate.cruise_flap_hz.is_some() { gate.cruise_flap_flight } else { CruiseFlapFlight::LongitudinalSegment };
+    let modes = if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path, flap_flight)?) } else { None };
     let mut row = Validated { iteration, env_steps, validation_s: 0.0, score, modes, identification_fit_percent: None };
     if gate.identification_fit_percent.is_some() && meets_flight_bars(gate, &row) {
         row.identification_fit_percent = Some(identification_fit_percent(robot, path)?);
