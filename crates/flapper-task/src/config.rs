@@ -207,6 +207,14 @@ pub struct RewardConfig {
     /// (sinking faster than horizontal speed / [`GLIDE_MIN_RATIO`]), where the robot must flap to brake
     /// and hold the path: 1 prices it as everywhere, 0 not at all (r_energy reads 1 there).
     pub energy_dive_share: f64,
+    /// Weighs r_pos more where the reference dives steeper than a glide slope (the dives of
+    /// `energy_dive_share`): r_pos times 1 + this gain there, times 1 on level paths, climbs and glide
+    /// slopes. A stage that learns to hold its wings on glide slopes can hold them in a dive too, where the
+    /// path needs the stroke to brake and steer (docs/experiments.md, "The glide's lost dive"); a dearer
+    /// miss there asks it to tell the two apart. 0 weighs every slope alike and is left out of a written
+    /// config.
+    #[serde(skip_serializing_if = "is_default_position_dive_gain")]
+    pub position_dive_gain: f64,
 }
 
 fn is_default_flap_rate_weight(value: &f64) -> bool {
@@ -231,6 +239,10 @@ fn is_default_glide_hold_weight(value: &f64) -> bool {
 
 fn is_default_glide_hold_scale_deg(value: &f64) -> bool {
     *value == RewardConfig::default().glide_hold_scale_deg
+}
+
+fn is_default_position_dive_gain(value: &f64) -> bool {
+    *value == RewardConfig::default().position_dive_gain
 }
 
 /// Over how much speed (m/s) below `reward.smoothness_min_speed_mps` the smoothness weight falls to 0,
@@ -433,6 +445,7 @@ impl Default for RewardConfig {
             energy_min_speed_mps: 0.0,
             energy_glide_gain: 0.0,
             energy_dive_share: 1.0,
+            position_dive_gain: 0.0,
         }
     }
 }
@@ -646,6 +659,7 @@ impl TaskConfig {
             ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
             ("reward.energy_dive_share", r.energy_dive_share, 0.0, 1.0),
             ("reward.smoothness_dive_share", r.smoothness_dive_share, 0.0, 1.0),
+            ("reward.position_dive_gain", r.position_dive_gain, 0.0, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),
             ("randomization.link_com_offset_m", g.link_com_offset_m, 0.0, 0.1),
             ("randomization.wind_mps[0]", g.wind_mps[0], 0.0, 20.0),

@@ -319,6 +319,7 @@ impl FlightEnv {
                 glide_share: self.glide_share(),
             },
         )
+        .with_position_weighed(self.position_factor())
         .with_energy_priced(self.energy_price_share())
         .with_flap_rate_priced(self.flap_rate_price_share());
         let end = if fault.is_some() {
@@ -410,6 +411,13 @@ impl FlightEnv {
         let min_speed = reward.energy_min_speed_mps;
         let share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
         share * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
+    }
+
+    /// r_pos's factor at the current step: 1 + `reward.position_dive_gain` where the reference dives
+    /// steeper than a glide slope ([`Self::slope_factor`]), 1 elsewhere (and everywhere at gain 0).
+    pub fn position_factor(&self) -> f64 {
+        let gain = self.config.reward.position_dive_gain;
+        if gain == 0.0 { 1.0 } else { self.slope_factor(0.0, 1.0 + gain) }
     }
 
     /// The weight of the learner's smoothness term for the action chosen at the current observation:

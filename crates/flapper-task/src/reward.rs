@@ -5,7 +5,7 @@
 //!
 //! | term | kernel | scale (default) |
 //! |---|---|---|
-//! | r_pos | exp(-e^2 / s^2), e = distance to the current target point | s = 1.0 m |
+//! | r_pos | g exp(-e^2 / s^2), e = distance to the current target point, g = 1 but in steep dives | s = 1.0 m |
 //! | r_rate | exp(-(p^2 + q^2 + r^2) / s^2) | s = 3.0 rad/s |
 //! | r_level | exp(-(roll^2 + pitch^2) / s^2) | s = 0.5 rad |
 //! | r_energy | exp(-P / s), P = mean of sum(abs(torque * joint velocity)) over the step | s = 20 W |
@@ -20,7 +20,9 @@
 //! Nor is r_glide_hold (weight 0 unless `glide_hold_weight` is set): it pays a held wing where the path
 //! sinks at a slope the robot can glide (g, the glide share of [`crate::env::FlightEnv::glide_share`]),
 //! by how little the flap swings ([`crate::flap_rhythm::FlapSwing`]), and nothing elsewhere: the
-//! paper's "gliding instead of flapping when possible" asked for directly.
+//! paper's "gliding instead of flapping when possible" asked for directly. Nor is r_pos's g: 1 + the
+//! gain `position_dive_gain` where the path dives steeper than a glide slope (0 unless set), a dearer
+//! miss where the robot must flap to brake and steer.
 
 use crate::config::RewardConfig;
 
@@ -101,6 +103,12 @@ impl RewardTerms {
     /// to 1 - share where the kernel reads 0.
     pub fn with_energy_priced(self, share: f64) -> Self {
         Self { energy: priced_in_part(self.energy, share), ..self }
+    }
+
+    /// r_pos weighed by `factor` (1 + `reward.position_dive_gain` in a steep dive,
+    /// [`crate::env::FlightEnv::position_factor`]): 1 leaves it as it is, bit for bit.
+    pub fn with_position_weighed(self, factor: f64) -> Self {
+        Self { position: self.position * factor, ..self }
     }
 
     /// The flap's price paid in part: r_flap_rate = 1 - share (1 - k), k the kernel's value (`share` 1

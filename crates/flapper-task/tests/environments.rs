@@ -781,6 +781,41 @@ fn the_energy_in_steep_dives_is_priced_by_its_share_and_glide_slopes_are_not_div
     }
 }
 
+#[test]
+fn the_position_term_in_steep_dives_weighs_one_plus_its_gain_and_nowhere_else() {
+    let flown = |reference: Arc<Reference>, gain: f64| {
+        let mut config = TaskConfig::default();
+        config.reward.position_dive_gain = gain;
+        let factor = FlightEnv::new(
+            &robot(),
+            Arc::new(exact_start(config.clone())),
+            ReferenceSource::Fixed(reference.clone()),
+            1,
+            0,
+        )
+        .unwrap()
+        .position_factor();
+        (factor, stroke_priced(config, reference).1)
+    };
+    let (factor, plain) = flown(sloped(-1.5), 0.0);
+    assert_eq!(factor, 1.0, "off: every slope alike");
+    let (factor, dearer) = flown(sloped(-1.5), 2.0);
+    assert_eq!(factor, 3.0, "longitudinal's dive, 2.5 : 1: 1 + the gain");
+    // The same flight, r_pos three times its kernel, and the reward richer by the weight of two kernels.
+    assert_eq!(dearer.position_error_m, plain.position_error_m);
+    assert!(plain.terms.position > 0.5, "near the path from the exact start: {:?}", plain.terms);
+    assert!((dearer.terms.position - 3.0 * plain.terms.position).abs() < 1e-12);
+    let weight = TaskConfig::default().reward.position_weight;
+    assert!((dearer.reward - plain.reward - weight * 2.0 * plain.terms.position).abs() < 1e-9);
+    for (vertical, what) in [(-0.83, "a glide slope"), (0.0, "level"), (0.8, "a climb")] {
+        let (factor, step) = flown(sloped(vertical), 2.0);
+        assert_eq!(factor, 1.0, "{what}: no dive, weighed as everywhere");
+        assert_eq!(step.terms, flown(sloped(vertical), 0.0).1.terms, "{what}: the kernel itself, bit for bit");
+    }
+    let refused = TaskConfig::from_toml("[reward]\nposition_dive_gain = -1\n", "test.toml").unwrap_err().to_string();
+    assert!(refused.contains("reward.position_dive_gain") && refused.contains("-1"), "{refused}");
+}
+
 /// A circle of radius `radius_m` flown at `speed_mps`, starting at `start_rad` of its way round, in the
 /// vertical x-z plane (a back-flip: climbing first) or, `level`, in the horizontal plane (turning left).
 fn circle(radius_m: f64, speed_mps: f64, start_rad: f64, level: bool) -> Reference {
