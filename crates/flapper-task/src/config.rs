@@ -211,8 +211,9 @@ pub struct RewardConfig {
     /// `energy_dive_share`): r_pos times 1 + this gain there, times 1 on level paths, climbs and glide
     /// slopes. A stage that learns to hold its wings on glide slopes can hold them in a dive too, where the
     /// path needs the stroke to brake and steer (docs/experiments.md, "The glide's lost dive"); a dearer
-    /// miss there asks it to tell the two apart. 0 weighs every slope alike and is left out of a written
-    /// config.
+    /// miss there asks it to tell the two apart. Measured, gain 2 did not: seed 2's glide stage lost the
+    /// dive as without it ("A dearer dive, and what takes seed 2's dive"). 0 weighs every slope alike and
+    /// is left out of a written config.
     #[serde(skip_serializing_if = "is_default_position_dive_gain")]
     pub position_dive_gain: f64,
 }
