@@ -162,9 +162,14 @@ impl StageConfig {
         self.gate.min_iterations.max(self.validate_every)
     }
 
-    /// What the stage keeps back from the extensions and restarts of the stages before it
-    /// (`reserved_iterations`, or by default its least iterations, none if optional).
-    pub fn kept_back_iterations(&self) -> usize {
+    /// What the stage keeps back from the extensions and restarts of an earlier stage
+    /// (`reserved_iterations`, or by default its least iterations, none if optional). An optional stage
+    /// keeps nothing back from a required one (`earlier_optional` false): a required stage that does not
+    /// meet its gate ends the run with no controller, which no refinement after it can make up for.
+    pub fn kept_back_iterations(&self, earlier_optional: bool) -> usize {
+        if self.optional && !earlier_optional {
+            return 0;
+        }
         self.reserved_iterations.unwrap_or(self.fewest_kept_back())
     }
 
@@ -536,8 +541,8 @@ impl CurriculumConfig {
     /// stages before it spent `spent_env_steps`): half its `max_iterations` at most, and no more than the
     /// run's `max_env_steps` leaves after the fewest iterations every later stage needs to hand over
     /// ([`StageConfig::kept_back_iterations`]: by default its least iterations, and an optional stage holds
-    /// nothing back, a required stage meeting its gate mattering more than the refinement after it, unless
-    /// its `reserved_iterations` says otherwise); a multiple of `validate_every` (0: no room).
+    /// nothing back, a required stage meeting its gate mattering more than the refinement after it; its
+    /// `reserved_iterations` hold only against optional stages); a multiple of `validate_every` (0: no room).
     /// Keeping back the later stages' whole `max_iterations` instead left no stage but the last any room: the shipped
     /// stages' caps add up to more than the run's budget by design, so a heavier robot's stage 2 still
     /// improving at its 400th iteration stopped the run with 27 M of the 30 M steps unspent.
@@ -556,7 +561,7 @@ impl CurriculumConfig {
         if let Some(total) = self.max_env_steps {
             let mut reserved = spent_env_steps + trained as u64 * per_iteration(number)?;
             for later in number + 1..=self.stages.len() {
-                let kept = self.stages[later - 1].kept_back_iterations();
+                let kept = self.stages[later - 1].kept_back_iterations(stage.optional);
                 if kept > 0 {
                     reserved += kept as u64 * per_iteration(later)?;
                 }
@@ -774,6 +779,15 @@ task = { stage = 2 }
         assert_eq!(reserving.stage_iterations(6, seed1_before_stage5 + 1200 * 6144).unwrap(), 1175);
         reserving.stages[5].reserved_iterations = Some(1100);
         assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 50);
+        // Against a required stage an optional one's reservation holds nothing back: seed 3's stage 4,
+        // stalled at its 1000th iteration after 3103 of stages 1-3, restarts for its half budget, 500, with
+        // the sixth stage reserving 1100 as without the reservation. Were the sixth stage required, its
+        // reservation would hold: the 4103 iterations trained and its 1100 leave none of the 30 M.
+        assert_eq!(reserving.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 500);
+        assert_eq!(slope_sixth.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 500);
+        let mut required_sixth = reserving.clone();
+        required_sixth.stages[5].optional = false;
+        assert_eq!(required_sixth.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 0);
         let unreserved = StageConfig { reserved_iterations: None, ..reserving.stages[5].clone() };
         assert_eq!(unreserved.as_trained(), reserving.stages[5].as_trained(), "what it trains is the same");
 
