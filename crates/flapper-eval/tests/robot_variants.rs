@@ -89,19 +89,29 @@ fn light_robot_weighs_0_85_times_ours_and_the_scripted_gait_flies_it() {
     assert_mass_scaled("light.xml", 0.85);
 }
 
-#[test]
-fn wide_robot_spans_1_10_times_ours_and_the_scripted_gait_flies_it() {
-    let (shipped, robot) = (RobotModel::flapper().unwrap(), variant("wide.xml"));
+/// The wingspan is `factor` times ours, the mean chord and the mass as shipped; the scripted gait flies it.
+fn assert_span_scaled(file: &str, factor: f64) {
+    let (shipped, robot) = (RobotModel::flapper().unwrap(), variant(file));
     let (d0, d) = (shipped.dimensions(), robot.dimensions());
     assert!(
-        relative(d.wingspan_m, 1.10 * d0.wingspan_m) < 1e-3,
-        "wingspan {} m against {} m",
+        relative(d.wingspan_m, factor * d0.wingspan_m) < 1e-3,
+        "{file}: wingspan {} m against {factor} x {} m",
         d.wingspan_m,
         d0.wingspan_m
     );
-    assert!(relative(d.mean_chord_m, d0.mean_chord_m) < 1e-9, "mean chord {} m", d.mean_chord_m);
-    assert!(relative(d.total_mass_kg, d0.total_mass_kg) < 1e-9, "total mass {} kg", d.total_mass_kg);
-    assert_scripted_gait_flies(&robot, "wide.xml");
+    assert!(relative(d.mean_chord_m, d0.mean_chord_m) < 1e-9, "{file}: mean chord {} m", d.mean_chord_m);
+    assert!(relative(d.total_mass_kg, d0.total_mass_kg) < 1e-9, "{file}: total mass {} kg", d.total_mass_kg);
+    assert_scripted_gait_flies(&robot, file);
+}
+
+#[test]
+fn wide_robot_spans_1_10_times_ours_and_the_scripted_gait_flies_it() {
+    assert_span_scaled("wide.xml", 1.10);
+}
+
+#[test]
+fn narrow_robot_spans_0_90_times_ours_and_the_scripted_gait_flies_it() {
+    assert_span_scaled("narrow.xml", 0.90);
 }
 
 /// Every PD servo's kp and kv are `factor` times ours; torque limits and mass as shipped; the scripted gait
