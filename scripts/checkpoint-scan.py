@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
 """How a stage's checkpoints do on the bars its gate does not see: the robustness sweeps from starts the
-gate never flew, the same sweeps with the bars' own seed, and the closed-loop identification.
+gate never flew, the same sweeps with the bars' own seed, and the closed-loop identification; or, with
+--stroke, how each one strokes the segments of the longitudinal reference.
 
-    scripts/checkpoint-scan.py --out DIR STAGE_DIR [--every 50] [--from 0] [--jobs N] [--extra POLICY ...]
+    scripts/checkpoint-scan.py --out DIR STAGE_DIR [--every 50] [--from 0] [--jobs N] [--extra POLICY ...] [--stroke]
 
 For every checkpoint `STAGE_DIR/checkpoints/iter_*.safetensors` at a multiple of --every from iteration
 --from on (and every --extra policy file): longitudinal with all five fluid coefficients x[0.7, 1.3] and
 lateral under Table III at once, each from 200 held-out starts (`--seed 1000`) and from the robustness bars'
 100 starts (`--seed 1`), and `flapper sysid`'s validation fit per axis. Jobs run side by side, one thread
-each (--jobs, default one per core). Writes DIR/scan.csv and prints it. The flapper binary: $FLAPPER,
+each (--jobs, default one per core). With --stroke, only `flapper modes` (one flight from the exact start,
+about a second): per segment (cruise, climb, glide, dive) the flap's amplitude, its fundamental, the share of
+its energy in that fundamental (near 1: a steady rhythm), the mean net power and the glide fraction. Writes
+DIR/scan.csv and prints it. The flapper binary: $FLAPPER,
 else target/release/flapper. A checkpoint can be flown directly (no export needed).
 """
 
@@ -24,6 +28,26 @@ from pathlib import Path
 
 HELD_OUT_SEED, HELD_OUT_EPISODES = 1000, 200
 BAR_SEED, BAR_EPISODES = 1, 100
+
+
+def stroke_jobs_for(flapper, name, policy, out):
+    """`flapper modes` for one policy: (output folder, argument list)."""
+    modes = out / name / "modes"
+    return [(modes, [flapper, "modes", "--policy", str(policy), "--out", str(modes)])]
+
+
+def stroke_row(name, folder):
+    """One row of the --stroke table from `flapper modes`' modes.json."""
+    segments = json.loads((folder / "modes" / "modes.json").read_text())["segments"]
+    row = {"policy": name}
+    for s in segments:
+        tag = s["segment"]
+        row[f"{tag}_flap_amplitude_deg"] = round(s["flap_amplitude_deg"], 1)
+        row[f"{tag}_flap_fundamental_hz"] = round(s["flap_fundamental_hz"], 2)
+        row[f"{tag}_flap_energy_fraction"] = round(s["flap_energy_fraction"], 2)
+        row[f"{tag}_mean_power_w"] = round(s["mean_power_w"], 2)
+        row[f"{tag}_glide_fraction"] = round(s["glide_fraction"], 2)
+    return row
 
 
 def jobs_for(flapper, name, policy, out):
@@ -79,6 +103,8 @@ def main():
     parser.add_argument("--from", dest="start", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
     parser.add_argument("--extra", type=Path, nargs="*", default=[])
+    parser.add_argument("--stroke", action="store_true",
+                        help="fly `flapper modes` only: the stroke per segment of longitudinal")
     a = parser.parse_args()
     if a.every < 1:
         sys.exit(f"checkpoint-scan: --every must be at least 1, not {a.every}")
@@ -93,12 +119,16 @@ def main():
         sys.exit(f"checkpoint-scan: no checkpoint in '{a.stage_dir / 'checkpoints'}' from iteration {a.start} at a multiple of {a.every}")
     if a.out.exists() and any(a.out.iterdir()):
         sys.exit(f"checkpoint-scan: '{a.out}' is not empty; give a new --out")
-    jobs = [job for name, policy in policies for job in jobs_for(flapper, name, policy, a.out)]
+    make_jobs = stroke_jobs_for if a.stroke else jobs_for
+    jobs = [job for name, policy in policies for job in make_jobs(flapper, name, policy, a.out)]
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         list(pool.map(run, jobs))
     rows = []
     for name, _ in policies:
         d = a.out / name
+        if a.stroke:
+            rows.append(stroke_row(name, d))
+            continue
         fits = json.loads((d / "sysid" / "sysid.json").read_text())
         rows.append({
             "policy": name,
