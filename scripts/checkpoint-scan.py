@@ -11,9 +11,9 @@ lateral under Table III at once, each from 200 held-out starts (`--seed 1000`) a
 100 starts (`--seed 1`), and `flapper sysid`'s validation fit per axis. Jobs run side by side, one thread
 each (--jobs, default one per core). With --stroke, only `flapper modes` (one flight from the exact start,
 about a second): per segment (cruise, climb, glide, dive) the flap's amplitude, its fundamental, the share of
-its energy in that fundamental (near 1: a steady rhythm), the mean net power and the glide fraction. Writes
-DIR/scan.csv and prints it. The flapper binary: $FLAPPER,
-else target/release/flapper. A checkpoint can be flown directly (no export needed).
+its energy in that fundamental (near 1: a steady rhythm), the mean net power and the glide fraction.
+Writes DIR/scan.csv and prints it. The flapper binary: $FLAPPER, else target/release/flapper. A checkpoint
+can be flown directly (no export needed).
 """
 
 import argparse
@@ -28,16 +28,15 @@ from pathlib import Path
 
 HELD_OUT_SEED, HELD_OUT_EPISODES = 1000, 200
 BAR_SEED, BAR_EPISODES = 1, 100
+# --stroke: longitudinal's segments as `flapper modes` names them, and the figures taken from each.
+SEGMENTS = ["cruise", "climb", "glide", "dive"]
+STROKE_FIGURES = ["flap_amplitude_deg", "flap_fundamental_hz", "flap_energy_fraction", "mean_power_w", "glide_fraction"]
 
 
 def stroke_jobs_for(flapper, name, policy, out):
     """`flapper modes` for one policy: (output folder, argument list)."""
     modes = out / name / "modes"
     return [(modes, [flapper, "modes", "--policy", str(policy), "--out", str(modes)], True)]
-
-
-SEGMENTS = ["cruise", "climb", "glide", "dive"]
-STROKE_FIGURES = ["flap_amplitude_deg", "flap_fundamental_hz", "flap_energy_fraction", "mean_power_w", "glide_fraction"]
 
 
 def stroke_row(name, folder):
@@ -51,12 +50,8 @@ def stroke_row(name, folder):
     segments = json.loads((modes / "modes.json").read_text())["segments"]
     row = {"policy": name, "flown": "yes"}
     for s in segments:
-        tag = s["segment"]
-        row[f"{tag}_flap_amplitude_deg"] = round(s["flap_amplitude_deg"], 1)
-        row[f"{tag}_flap_fundamental_hz"] = round(s["flap_fundamental_hz"], 2)
-        row[f"{tag}_flap_energy_fraction"] = round(s["flap_energy_fraction"], 2)
-        row[f"{tag}_mean_power_w"] = round(s["mean_power_w"], 2)
-        row[f"{tag}_glide_fraction"] = round(s["glide_fraction"], 2)
+        for figure in STROKE_FIGURES:
+            row[f"{s['segment']}_{figure}"] = round(s[figure], 1 if figure == "flap_amplitude_deg" else 2)
     return row
 
 
