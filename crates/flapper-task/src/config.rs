@@ -187,6 +187,13 @@ pub struct RewardConfig {
     /// glide slope, which the robot can fly with its wings held, asks for a held stroke; level flight,
     /// climbs and steeper dives (which need quick corrections) weigh 1. 0 weighs every slope 1.
     pub smoothness_glide_gain: f64,
+    /// Lifts `smoothness_glide_gain` this long (s) before the reference dives steeper than a glide slope:
+    /// a glide slope with a dive within this time ahead weighs the smoothness as level flight, so that the
+    /// stroke is free to change while the path turns down into the dive (seed 2's glide stage, priced x10
+    /// up to the dive's first step, lost longitudinal's dive; docs/experiments.md, "What takes seed 2's
+    /// dive"). 0 (the default, left out of a written config) weighs every glide-slope step alike.
+    #[serde(skip_serializing_if = "is_default_smoothness_glide_stop_before_dive_s")]
+    pub smoothness_glide_stop_before_dive_s: f64,
     /// The share of the smoothness weight kept where the reference dives steeper than a glide slope
     /// (the dives of `energy_dive_share`), where the robot must flap to brake and hold the path: 1 weighs
     /// a dive as level flight, 0 asks no steady stroke there at all.
@@ -240,6 +247,10 @@ fn is_default_glide_hold_weight(value: &f64) -> bool {
 
 fn is_default_glide_hold_scale_deg(value: &f64) -> bool {
     *value == RewardConfig::default().glide_hold_scale_deg
+}
+
+fn is_default_smoothness_glide_stop_before_dive_s(value: &f64) -> bool {
+    *value == RewardConfig::default().smoothness_glide_stop_before_dive_s
 }
 
 fn is_default_position_dive_gain(value: &f64) -> bool {
@@ -442,6 +453,7 @@ impl Default for RewardConfig {
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
+            smoothness_glide_stop_before_dive_s: 0.0,
             smoothness_dive_share: 1.0,
             energy_min_speed_mps: 0.0,
             energy_glide_gain: 0.0,
@@ -657,6 +669,7 @@ impl TaskConfig {
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),
+            ("reward.smoothness_glide_stop_before_dive_s", r.smoothness_glide_stop_before_dive_s, 0.0, 60.0),
             ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
             ("reward.energy_dive_share", r.energy_dive_share, 0.0, 1.0),
             ("reward.smoothness_dive_share", r.smoothness_dive_share, 0.0, 1.0),
@@ -844,6 +857,8 @@ mod tests {
         assert!(err.contains("reward.action_rate_weight") && err.contains("-1"), "{err}");
         let err = refused("[reward]\nenergy_dive_share = 1.5\n");
         assert!(err.contains("reward.energy_dive_share") && err.contains("1.5"), "{err}");
+        let err = refused("[reward]\nsmoothness_glide_stop_before_dive_s = -0.5\n");
+        assert!(err.contains("reward.smoothness_glide_stop_before_dive_s") && err.contains("-0.5"), "{err}");
         let err = refused("[reward]\nsmoothness_dive_share = -0.5\n");
         assert!(err.contains("reward.smoothness_dive_share") && err.contains("-0.5"), "{err}");
         let err = refused("[reward]\nenergy_glide_gain = -2\n");

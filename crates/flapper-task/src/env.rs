@@ -112,6 +112,13 @@ fn check_reference_step(source: &ReferenceSource, period_s: f64) -> Result<(), M
     }
 }
 
+/// Whether a reference velocity (z up) dives steeper than the slope the robot can glide: it sinks, with
+/// less than [`GLIDE_MIN_RATIO`] times its sink speed along the ground.
+fn is_steeper_than_glide(velocity: Vec3) -> bool {
+    let sink = -velocity.z;
+    sink > 0.0 && velocity.x.hypot(velocity.y) < GLIDE_MIN_RATIO * sink
+}
+
 pub struct FlightEnv {
     config: Arc<TaskConfig>,
     control: ControlLoop,
@@ -433,8 +440,17 @@ impl FlightEnv {
             weight *= (-(turn / reward.smoothness_turn_scale_degps).powi(2)).exp();
         }
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
-        weight *= self.slope_factor(reward.smoothness_glide_gain, reward.smoothness_dive_share);
+        let stop = reward.smoothness_glide_stop_before_dive_s;
+        let glide_gain = if stop > 0.0 && self.dives_within_s(stop) { 0.0 } else { reward.smoothness_glide_gain };
+        weight *= self.slope_factor(glide_gain, reward.smoothness_dive_share);
         weight as f32
+    }
+
+    /// Whether the reference dives steeper than a glide slope at some step of the next `seconds`
+    /// (`reward.smoothness_glide_stop_before_dive_s`).
+    fn dives_within_s(&self, seconds: f64) -> bool {
+        let steps = (seconds / self.reference.dt_s()).round() as usize;
+        (self.step + 1..=self.step + steps).any(|k| is_steeper_than_glide(self.reference.velocity(k)))
     }
 
     /// The share of r_flap_rate's price paid at the current step: `reward.flap_rate_glide_share` on a
@@ -457,13 +473,13 @@ impl FlightEnv {
     /// where it sinks steeper, 1 on level paths and climbs.
     fn slope_factor(&self, glide_gain: f64, dive_share: f64) -> f64 {
         let velocity = self.reference.velocity(self.step);
-        let (sink, horizontal) = (-velocity.z, velocity.x.hypot(velocity.y));
+        let sink = -velocity.z;
         if sink <= 0.0 {
             1.0
-        } else if horizontal >= GLIDE_MIN_RATIO * sink {
-            1.0 + glide_gain * (sink / GLIDE_SINK_MPS).min(1.0)
-        } else {
+        } else if is_steeper_than_glide(velocity) {
             dive_share
+        } else {
+            1.0 + glide_gain * (sink / GLIDE_SINK_MPS).min(1.0)
         }
     }
 

@@ -737,6 +737,31 @@ fn the_smoothness_weight_in_steep_dives_is_its_share_and_glide_slopes_are_not_di
 }
 
 #[test]
+fn the_glide_slopes_smoothness_gain_is_lifted_before_a_dive_and_only_within_its_time() {
+    // Glides (0.83 m/s down at 3.8 m/s) for 0.5 s (steps 0-24), then dives (1.5 m/s down) for 1 s.
+    let glide_then_dive = {
+        let mut point = Vec3::new(0.0, 0.0, 10.0);
+        let mut points = vec![point];
+        for k in 0..75 {
+            point += Vec3::new(3.8, 0.0, if k < 25 { -0.83 } else { -1.5 }) * 0.02;
+            points.push(point);
+        }
+        Arc::new(Reference::new("glide then dive", 0.02, points))
+    };
+    let first_weight = |reference: Arc<Reference>, stop_s: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.smoothness_glide_gain = 9.0;
+        config.reward.smoothness_glide_stop_before_dive_s = stop_s;
+        env_on(config, reference).smoothness_weight()
+    };
+    assert!((first_weight(glide_then_dive.clone(), 0.0) - 10.0).abs() < 1e-4, "off: the glide slope's 1 + gain");
+    assert!((first_weight(glide_then_dive.clone(), 0.4) - 10.0).abs() < 1e-4, "the dive 0.5 s ahead: not within 0.4 s");
+    assert!((first_weight(glide_then_dive.clone(), 0.6) - 1.0).abs() < 1e-6, "within 0.6 s: weighed as level flight");
+    assert!((first_weight(sloped(-0.83), 5.0) - 10.0).abs() < 1e-4, "no dive ahead, however far: the gain holds");
+    assert!((first_weight(sloped(-1.5), 5.0) - 1.0).abs() < 1e-6, "the dive itself: its share, as without the key");
+}
+
+#[test]
 fn the_energy_is_priced_more_on_glide_slopes_by_its_gain_and_nowhere_else() {
     let flown = |reference: Arc<Reference>, gain: f64| {
         let mut config = TaskConfig::default();
