@@ -197,6 +197,20 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
     Ok(config.clone())
 }
 
+/// Clears what a stage interrupted before its first checkpoint left in its folder (its `config.toml`, the
+/// log of the iterations it trained, their figure), which no trainer can resume from: the stage starts again
+/// as it first did and trains those iterations again, bit for bit. The run folder's lock keeps every other
+/// curriculum out of it; checkpoints, which would hold work, are never touched (with one, the stage resumes).
+fn clear_start_without_checkpoint(here: &Path) -> Result<(), CurriculumError> {
+    for name in ["config.toml", "training.csv", "learning_curves.svg"] {
+        let path = here.join(name);
+        if path.exists() {
+            std::fs::remove_file(&path).map_err(|e| CurriculumError::File { path, message: e.to_string() })?;
+        }
+    }
+    Ok(())
+}
+
 /// The record of a stage the run's budget left too little to start (`why`, the error saying so).
 fn never_started(stage: &StageConfig, number: usize, why: &CurriculumError) -> StoppedStage {
     StoppedStage {
@@ -353,6 +367,9 @@ fn run_stage(
     selection.rows.sort_by_key(|r| r.iteration);
     std::fs::create_dir_all(&here).map_err(|e| CurriculumError::File { path: here.clone(), message: e.to_string() })?;
     selection.write(&selection_path, &names)?;
+    if resumed_at.is_none() && !finished {
+        clear_start_without_checkpoint(&here)?;
+    }
 
     loop {
         if !finished {

@@ -137,6 +137,24 @@ fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
     assert_eq!(run(&inside, TINY, None).unwrap(), 2);
     same_run(&whole, &inside);
 
+    // Before a stage's first checkpoint: what a kill during stage 2's first iteration leaves (its
+    // config.toml and a log row, no checkpoint; the outcome and the final policy not written). The stage
+    // starts again and ends as the uninterrupted one.
+    let early = scratch("early");
+    copy_dir(&whole, &early);
+    let stage2 = stage_dir(&early, 2);
+    for name in ["selected.json", "policy.safetensors", "policy.safetensors.json"] {
+        std::fs::remove_file(stage2.join(name)).unwrap();
+    }
+    std::fs::remove_dir_all(stage2.join("checkpoints")).unwrap();
+    std::fs::create_dir_all(stage2.join("checkpoints")).unwrap();
+    let log = std::fs::read_to_string(stage2.join("training.csv")).unwrap();
+    std::fs::write(stage2.join("training.csv"), log.lines().take(2).map(|l| format!("{l}\n")).collect::<String>())
+        .unwrap();
+    std::fs::remove_file(early.join("policy.safetensors")).unwrap();
+    assert_eq!(run(&early, TINY, None).unwrap(), 2);
+    same_run(&whole, &early);
+
     // A second process on the same folder is refused while the first holds it.
     let held = flapper_files::lock_folder(&whole).unwrap().expect("nobody holds it now");
     let e = run(&whole, TINY, None).unwrap_err();
@@ -151,7 +169,7 @@ fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
     let e = run(&foreign, TINY, None).unwrap_err();
     assert!(e.contains("curriculum.toml"), "{e}");
     assert_eq!(std::fs::read_to_string(foreign.join("notes.txt")).unwrap(), "mine");
-    for dir in [whole, between, inside, foreign] {
+    for dir in [whole, between, inside, early, foreign] {
         std::fs::remove_dir_all(dir).unwrap();
     }
 }
