@@ -75,6 +75,12 @@ pub struct StageConfig {
     /// standard deviation, for as many iterations as an extension gets (within the run's budget).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart_noise_std: Option<f32>,
+    /// With `restart_noise_std`: the restart continues from the stage's best checkpoint (the one its
+    /// stall names: most references completed, then the smallest mean RMS error) instead of its last,
+    /// for a stage whose validations peaked and then drifted back; the iteration count and the budget go on
+    /// from the last. Absent (false), from the last.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub restart_from_best: bool,
     /// An optional stage: one that refines a controller the stages before it already made (the
     /// efficient flight of stage 5). Missing its gate (or too little budget left to start it) does not
     /// stop the run: the run ends with the previous stage's controller (the optional stages after it
@@ -149,11 +155,18 @@ pub struct RandomizedValidation {
 }
 
 impl StageConfig {
-    /// The stage less what it does once its budget is spent (`restart_noise_std`, `optional`, the
-    /// gate's `rms_sought`): what it trains and how it is judged.
+    /// The stage less what it does once its budget is spent (`restart_noise_std`, `restart_from_best`,
+    /// `optional`, the gate's `rms_sought`): what it trains and how it is judged.
     pub fn as_trained(&self) -> StageConfig {
         let gate = Gate { rms_sought: false, ..self.gate.clone() };
-        StageConfig { restart_noise_std: None, optional: false, reserved_iterations: None, gate, ..self.clone() }
+        StageConfig {
+            restart_noise_std: None,
+            restart_from_best: false,
+            optional: false,
+            reserved_iterations: None,
+            gate,
+            ..self.clone()
+        }
     }
 
     /// The fewest iterations the stage can hand over after: one validation interval, or its gate's
@@ -477,6 +490,12 @@ impl CurriculumConfig {
                 {
                     return Err(bad(format!("{key} must be in (0, 10], got {std}")));
                 }
+            }
+            if stage.restart_from_best && stage.restart_noise_std.is_none() {
+                return Err(bad(
+                    "restart_from_best = true needs restart_noise_std (the restart it says where to begin from)"
+                        .to_owned(),
+                ));
             }
             let train = config.stage_train_config(number).map_err(|source| CurriculumConfigError::Stage {
                 origin: origin.to_owned(),
@@ -1065,6 +1084,8 @@ task = { stage = 3 }
             let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\nrestart_noise_std = {bad}"));
             assert!(e.contains("restart_noise_std must be in (0, 10]"), "{bad}: {e}");
         }
+        let e = err("start_noise_std = 0.4", "start_noise_std = 0.4\nrestart_from_best = true");
+        assert!(e.contains("restart_from_best = true needs restart_noise_std"), "{e}");
         for count in [0, MAX_AVERAGED_CHECKPOINTS + 1] {
             let e = err("start_noise_std = 0.4", &format!("start_noise_std = 0.4\naverage_checkpoints = {count}"));
             assert!(

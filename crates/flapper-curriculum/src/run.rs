@@ -382,7 +382,10 @@ fn run_stage(
             });
             let start = match (resumed_at, &previous) {
                 (Some(at), _) => match restart_due(&extensions, at) {
-                    Some(noise_std) => Start::Restart { noise_std },
+                    Some((noise_std, from)) => Start::Restart {
+                        noise_std,
+                        learner_from: from.map(|iteration| checkpoint_path(&here, iteration)),
+                    },
                     None => Start::Resume,
                 },
                 (None, Some(path)) => Start::InitFrom(path.clone()),
@@ -427,13 +430,27 @@ fn run_stage(
             });
             break;
         }
-        let reason = match restart_noise_std {
-            Some(std) => format!(
+        let restart_from_iteration = match restart_noise_std {
+            Some(_) if stage.restart_from_best => selection.best().map(|best| best.iteration),
+            _ => None,
+        };
+        let reason = match (restart_noise_std, restart_from_iteration) {
+            (Some(std), Some(best)) => format!(
+                "{reason}; exploration restarted from its best checkpoint, iteration {best}, with action noise {std} \
+                 (the iterations go on from {iterations})"
+            ),
+            (Some(std), None) => format!(
                 "{reason}; exploration restarted from the checkpoint of iteration {iterations} with action noise {std}"
             ),
-            None => reason,
+            (None, _) => reason,
         };
-        extensions.push(Extension { at_iteration: iterations, added_iterations: added, reason, restart_noise_std });
+        extensions.push(Extension {
+            at_iteration: iterations,
+            added_iterations: added,
+            reason,
+            restart_noise_std,
+            restart_from_iteration,
+        });
         write_extensions(&here, &extensions)?;
         progress(Progress::StageExtended { stage: number, extension: extensions.last().expect("just pushed") });
         iterations += added;
@@ -473,10 +490,12 @@ fn next_round(
     }
 }
 
-/// The action noise to restart with when the stage's latest checkpoint (`latest`, an iteration) is the
-/// one a restart began from: a run interrupted before its first checkpoint after a restart restarts again.
-fn restart_due(extensions: &[Extension], latest: usize) -> Option<f32> {
-    extensions.last().filter(|e| e.at_iteration == latest).and_then(|e| e.restart_noise_std)
+/// The action noise to restart with, and the earlier checkpoint whose learner to take (none: the
+/// latest's), when the stage's latest checkpoint (`latest`, an iteration) is the one a restart began
+/// from: a run interrupted before its first checkpoint after a restart restarts again.
+fn restart_due(extensions: &[Extension], latest: usize) -> Option<(f32, Option<usize>)> {
+    let restart = extensions.last().filter(|e| e.at_iteration == latest)?;
+    restart.restart_noise_std.map(|std| (std, restart.restart_from_iteration))
 }
 
 /// One stage's training from `start` to its config's iterations, each checkpoint judged on the
@@ -864,13 +883,21 @@ mod tests {
     use super::*;
 
     fn extension(at_iteration: usize, restart_noise_std: Option<f32>) -> Extension {
-        Extension { at_iteration, added_iterations: 100, reason: String::new(), restart_noise_std }
+        Extension {
+            at_iteration,
+            added_iterations: 100,
+            reason: String::new(),
+            restart_noise_std,
+            restart_from_iteration: None,
+        }
     }
 
     #[test]
     fn a_restart_is_due_only_from_the_checkpoint_it_began_at() {
         let restarted = [extension(3200, None), extension(3300, Some(0.4))];
-        assert_eq!(restart_due(&restarted, 3300), Some(0.4), "no checkpoint since the restart: restart again");
+        assert_eq!(restart_due(&restarted, 3300), Some((0.4, None)), "no checkpoint since the restart: restart again");
+        let from_best = [Extension { restart_from_iteration: Some(2900), ..extension(3200, Some(0.4)) }];
+        assert_eq!(restart_due(&from_best, 3200), Some((0.4, Some(2900))), "again from the same best checkpoint");
         assert_eq!(restart_due(&restarted, 3350), None, "a checkpoint since: resume it");
         assert_eq!(restart_due(&restarted[..1], 3200), None, "an extension is no restart");
         assert_eq!(restart_due(&[extension(3200, Some(0.4)), extension(3300, None)], 3200), None, "an earlier one");

@@ -316,6 +316,10 @@ pub struct Extension {
     /// (standard deviation) its last checkpoint continued with (the stage's `restart_noise_std`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart_noise_std: Option<f32>,
+    /// Set where the restart went back to the stage's best checkpoint (`restart_from_best`): its
+    /// iteration, whose learner the restart continued with (absent: the last checkpoint's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restart_from_iteration: Option<usize>,
 }
 
 /// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked

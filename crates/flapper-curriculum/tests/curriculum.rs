@@ -441,7 +441,41 @@ fn a_stalled_stage_restarts_its_exploration_once_where_asked_and_else_stops_sayi
     }
     assert_eq!(run(&interrupted, &text, None).unwrap_err().replace("restart-interrupted", "restarted"), e);
     assert_eq!(without_timing(&stage1.join("training.csv")), log, "the same iterations after the restart");
-    for dir in [dir, interrupted] {
+
+    // From the stage's best checkpoint instead (`restart_from_best`): the same eight iterations, then the
+    // restart takes the learner of the best validation's checkpoint (its weights, normalizer, optimizer
+    // and random state), so the iterations after it differ from a restart from the last; it is recorded.
+    let best_dir = scratch("restarted-best");
+    let from_best = stalled_stage("\nrestart_noise_std = 3.0\nrestart_from_best = true");
+    let e_best = run(&best_dir, &from_best, None).unwrap_err();
+    assert!(e_best.contains("after its exploration had been restarted once already"), "{e_best}");
+    let validations = without_timing(&stage_dir(&best_dir, 1).join("selection.csv"));
+    let column = |name: &str| validations[0].iter().position(|c| c == name).unwrap();
+    let (completed, rms) = (column("completed_percent"), column("mean_rms_m"));
+    let score = |row: &Vec<String>| (row[completed].parse::<f64>().unwrap(), row[rms].parse::<f64>().unwrap());
+    // The best of the first eight: most completed, then the smallest RMS, the earliest on a tie.
+    let best = (1..=8)
+        .reduce(|b, i| {
+            let ((bc, br), (c, r)) = (score(&validations[b]), score(&validations[i]));
+            if c > bc || (c == bc && r < br) { i } else { b }
+        })
+        .unwrap();
+    assert!(best < 8, "the validations of this stage peak before its last checkpoint (best {best})");
+    let extension = &summary(&best_dir)["stopped"]["extensions"][0];
+    assert_eq!(extension["restart_from_iteration"], best, "{extension}");
+    let reason = extension["reason"].as_str().unwrap();
+    let named = format!(
+        "restarted from its best checkpoint, iteration {best}, with action noise 3 (the iterations go on from 8)"
+    );
+    assert!(reason.contains(&named), "{reason}");
+    let best_log = without_timing(&stage_dir(&best_dir, 1).join("training.csv"));
+    assert_eq!(best_log[..=8], log[..=8], "the same run up to the restart");
+    assert_ne!(best_log[9], log[9], "another learner after it");
+    assert!(
+        (best_log[9][std_column].parse::<f64>().unwrap() - 3.0).abs() < 1e-3,
+        "the noise reset on the best checkpoint's learner"
+    );
+    for dir in [dir, interrupted, best_dir] {
         std::fs::remove_dir_all(dir).unwrap();
     }
 }

@@ -31,8 +31,12 @@ pub enum Start {
     /// New run whose policy (networks and normalizer) starts as another run's (curriculum stages).
     InitFrom(PathBuf),
     /// Continue from the latest checkpoint as `Resume` does, with the action noise (standard deviation)
-    /// reset to this value: fresh exploration for a curriculum stage whose learning has stalled.
-    Restart { noise_std: f32 },
+    /// reset to `noise_std`: fresh exploration for a curriculum stage whose learning has stalled. With
+    /// `learner_from`, an earlier checkpoint of the same run (its best), the learner (networks,
+    /// normalizer, optimizer, random state) goes back to that checkpoint's while the iteration count,
+    /// the environment steps and the environments go on from the latest: the run goes on, its policy
+    /// goes back to where it flew best.
+    Restart { noise_std: f32, learner_from: Option<PathBuf> },
 }
 
 pub struct Trainer<E: VecEnv> {
@@ -110,8 +114,15 @@ impl<E: VecEnv> Trainer<E> {
                     env_steps: loaded.info.env_steps,
                     wall_time_s: loaded.info.wall_time_s,
                 };
-                let mut ppo = resumed_learner(loaded, ppo_config, &runner);
-                if let Start::Restart { noise_std } = start {
+                let mut ppo = match &start {
+                    Start::Restart { learner_from: Some(earlier), .. } => {
+                        let earlier_loaded = checkpoint::load(earlier)?;
+                        earlier_loaded.check_layout(earlier, o, a)?;
+                        resumed_learner(earlier_loaded, ppo_config, &runner)
+                    }
+                    _ => resumed_learner(loaded, ppo_config, &runner),
+                };
+                if let Start::Restart { noise_std, .. } = start {
                     ppo.policy.set_noise_std(noise_std);
                 }
                 (folder, ppo)

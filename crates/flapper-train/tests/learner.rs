@@ -96,6 +96,45 @@ fn a_resumed_flight_run_equals_the_uninterrupted_one() {
 }
 
 #[test]
+fn a_restart_from_an_earlier_checkpoint_takes_its_learner_and_goes_on_from_the_latest() {
+    let dir = scratch_dir("restart-earlier");
+    train(&small_flight_config(4, 5), &dir, Start::Fresh);
+    let checkpoints = dir.join("checkpoints");
+    let earlier = checkpoint::load(&checkpoints.join("iter_000002.safetensors")).unwrap();
+    let latest = checkpoint::load(&checkpoints.join("iter_000004.safetensors")).unwrap();
+    assert_ne!(earlier.policy, latest.policy, "two iterations of learning changed the weights");
+
+    let robot = RobotModel::flapper().unwrap();
+    let start = |learner_from| Start::Restart { noise_std: 0.7, learner_from };
+    let from_earlier = checkpoints.join("iter_000002.safetensors");
+    let restarted = flight_trainer(&robot, &small_flight_config(6, 5), &dir, start(Some(from_earlier))).unwrap();
+    assert_eq!(
+        (restarted.iteration(), restarted.env_steps()),
+        (4, latest.info.env_steps),
+        "the run's clock goes on from the latest checkpoint"
+    );
+    assert_eq!(restarted.ppo().optimizer, earlier.optimizer.clone().unwrap(), "the earlier checkpoint's optimizer");
+    assert_eq!(restarted.ppo().learning_rate, earlier.info.learning_rate);
+    let mut expected = earlier.policy.clone();
+    expected.set_noise_std(0.7);
+    assert_eq!(restarted.ppo().policy, expected, "the earlier weights and normalizer, the noise reset");
+    drop(restarted);
+
+    // Without it, the restart keeps the latest learner (as before): only the noise differs.
+    let continued = flight_trainer(&robot, &small_flight_config(6, 5), &dir, start(None)).unwrap();
+    let mut expected = latest.policy.clone();
+    expected.set_noise_std(0.7);
+    assert_eq!(continued.ppo().policy, expected);
+    drop(continued);
+
+    // An earlier checkpoint that is not there is refused, naming it.
+    let missing = checkpoints.join("iter_000003.safetensors");
+    let err = flight_trainer(&robot, &small_flight_config(6, 5), &dir, start(Some(missing))).err().unwrap();
+    assert!(err.to_string().contains("iter_000003.safetensors"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
 fn the_action_rate_kernel_and_the_smoothness_are_logged_when_weighted_and_older_logs_keep_their_columns() {
     // Weighted: the action-rate, flap-rate and glide-hold kernels, the smoothness and the curvature together.
     let columns = |weight: Option<f64>, smoothness: f32, name: &str| {
