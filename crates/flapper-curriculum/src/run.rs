@@ -18,7 +18,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use flapper_ppo::checkpoint;
-use flapper_ppo::run_folder::{checkpoint_path, saved_checkpoints};
+use flapper_ppo::run_folder::{RUN_FILES, checkpoint_path, saved_checkpoints};
 use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
@@ -197,12 +197,14 @@ fn open_folder(dir: &Path, config: &CurriculumConfig) -> Result<CurriculumConfig
     Ok(config.clone())
 }
 
-/// Clears what a stage interrupted before its first checkpoint left in its folder (its `config.toml`, the
-/// log of the iterations it trained, their figure), which no trainer can resume from: the stage starts again
-/// as it first did and trains those iterations again, bit for bit. The run folder's lock keeps every other
-/// curriculum out of it; checkpoints, which would hold work, are never touched (with one, the stage resumes).
+/// Clears what a stage interrupted before its first checkpoint left in its folder (the files a run writes
+/// besides its checkpoints, [`RUN_FILES`]: its `config.toml`, the log of the iterations it trained, their
+/// figure; a policy file comes only with a finished stage, which is never cleared), which no trainer can
+/// resume from: the stage starts again as it first did and trains those iterations again, bit for bit. The
+/// run folder's lock keeps every other curriculum out of it; checkpoints, which would hold work, are never
+/// touched (with one, the stage resumes).
 fn clear_start_without_checkpoint(here: &Path) -> Result<(), CurriculumError> {
-    for name in ["config.toml", "training.csv", "learning_curves.svg"] {
+    for name in RUN_FILES {
         let path = here.join(name);
         if path.exists() {
             std::fs::remove_file(&path).map_err(|e| CurriculumError::File { path, message: e.to_string() })?;
