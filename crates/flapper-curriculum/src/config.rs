@@ -726,7 +726,7 @@ task = { stage = 2 }
         let optional: Vec<bool> = c.stages.iter().map(|s| s.optional).collect();
         assert_eq!(optional, [false, false, false, false, true], "a missed stage 5 leaves stage 4's controller");
         let rms_sought: Vec<bool> = c.stages.iter().map(|s| s.gate.rms_sought).collect();
-        assert_eq!(rms_sought, [false, false, false, true, false], "stage 4 hands over one that completes");
+        assert_eq!(rms_sought, [false, true, false, true, false], "stages 2 and 4 hand over one that completes");
         assert!(!c.stages[3].gate.reference_max_rms_m.is_empty(), "with its RMS bars");
         assert_eq!(c.stages[3].as_trained(), c.stages[3].as_trained().as_trained(), "as trained: idempotent");
         assert!(!c.stages[3].as_trained().gate.rms_sought, "decided at the budget's end: not part of training");
@@ -769,6 +769,14 @@ task = { stage = 2 }
         // budget, 500 (475 while stage 5 kept 300).
         let restart = shipped("experiments/curriculum-restart-stalled.toml");
         assert!(restart.stages == five.stages && restart.max_env_steps == Some(42_000_000), "the budget alone differs");
+        // The restarts from the best checkpoint (#57, the narrow robot's stage 2): what stages 2-4 do once
+        // stalled differs, nothing they train or how they are judged.
+        let from_best = shipped("experiments/curriculum-restart-from-best.toml");
+        let best: Vec<(Option<f32>, bool)> =
+            from_best.stages.iter().map(|s| (s.restart_noise_std, s.restart_from_best)).collect();
+        assert_eq!(best, [(None, false), (Some(0.4), true), (Some(0.4), true), (Some(0.4), true), (None, false)]);
+        let trained = |c: &CurriculumConfig| c.stages.iter().map(StageConfig::as_trained).collect::<Vec<_>>();
+        assert!(trained(&from_best) == trained(&five) && from_best.max_env_steps == five.max_env_steps);
         let seed2_before_stage3 = 227 * 6144;
         assert_eq!(five.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1100);
         assert_eq!(restart.extension_iterations(3, seed2_before_stage3, 3200).unwrap(), 1600);
