@@ -6,12 +6,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
 use flapper_curriculum::summary::Summary;
-use flapper_curriculum::{CurriculumConfig, CurriculumRequest, Progress, run_curriculum};
+use flapper_curriculum::{CurriculumConfig, CurriculumError, CurriculumRequest, Progress, run_curriculum};
 
 use crate::flag_values::seed;
 
 /// The shipped curriculum, relative to the repository (the default `--config`).
 const SHIPPED_CONFIG: &str = "configs/curriculum.toml";
+/// Stages 4 and 5 alone, to fine-tune a controller on another robot, and the controller to start from.
+const TRANSFER_CONFIG: &str = "configs/experiments/curriculum-transfer.toml";
+const SHIPPED_POLICY: &str = "policies/final/policy.safetensors";
 
 #[derive(clap::Args)]
 pub struct CurriculumArgs {
@@ -53,8 +56,15 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
             .with_context(|| format!("--init-from '{}' is not a policy or checkpoint", policy.display()))?;
     }
     let until_stage = args.until_stage.map(|k| k as usize);
+    let from_scratch = args.init_from.is_none();
     let request = CurriculumRequest { dir: &args.out, config, until_stage, command, init_from: args.init_from };
     let outcomes = run_curriculum(robot, request, &mut report_progress)
+        .map_err(|error| match (&error, model) {
+            (CurriculumError::GateMissed { .. }, Some(model)) if from_scratch => {
+                anyhow::anyhow!("{error}{}", transfer_hint(model, &args.out))
+            }
+            _ => anyhow::Error::new(error),
+        })
         .with_context(|| format!("curriculum in '{}'", args.out.display()))?;
     let summary = Summary::read(&args.out)?;
     println!(
@@ -71,6 +81,21 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
         println!("wrote {}", args.out.join(file).display());
     }
     Ok(())
+}
+
+/// What a robot of one's own whose run from scratch stopped at a gate can do next: the shipped controller
+/// fine-tuned on it (stages 4 and 5), the command spelled out.
+fn transfer_hint(model: &Path, out: &Path) -> String {
+    let name = out.file_name().map_or_else(|| "run".into(), |name| name.to_string_lossy());
+    format!(
+        ". For a robot of your own, the shipped controller fine-tuned on it may fly where training from scratch \
+         stopped (it trained heavy.xml, wide.xml and nose-heavy.xml of examples/robots/): flapper curriculum \
+         --config {} --model {} --init-from {} --out {}",
+        flapper_report::shipped_file(TRANSFER_CONFIG).display(),
+        model.display(),
+        flapper_report::shipped_file(SHIPPED_POLICY).display(),
+        out.with_file_name(format!("{name}-transfer")).display()
+    )
 }
 
 fn report_progress(event: Progress) {

@@ -666,6 +666,35 @@ fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
     assert!(out.join("policy.safetensors").is_file());
 }
 
+/// A run from scratch on a robot of one's own that stops at a gate ends with one error line that spells out
+/// the fine-tune of the shipped controller on that robot; on the shipped robot, or fine-tuning already, it
+/// does not.
+#[test]
+fn a_robot_s_run_stopped_at_a_gate_names_the_transfer_command() {
+    let text = "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
+                actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n\
+                validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
+                gate = { completed_percent = 100 }\ntask = { stage = 1 }\n";
+    let (config, out, output) = curriculum_in("curriculum-robot-stopped", text);
+    assert_one_line_error(&output, "missed its gate");
+    assert!(!String::from_utf8_lossy(&output.stderr).contains("curriculum-transfer.toml"), "the shipped robot");
+
+    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/flapper.xml").display().to_string();
+    let robot_out = out.with_file_name("robot");
+    let args = ["curriculum", "--model", &model, "--config", config.to_str().unwrap(), "--out"];
+    let output = flapper(&[&args[..], &[robot_out.to_str().unwrap()]].concat());
+    assert_one_line_error(&output, "missed its gate");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let transfer = format!("--model {model} --init-from ");
+    assert!(
+        stderr.contains("configs/experiments/curriculum-transfer.toml")
+            && stderr.contains(&transfer)
+            && stderr.contains("policies/final/policy.safetensors --out ")
+            && stderr.contains(&format!("{}-transfer", robot_out.display())),
+        "{stderr}"
+    );
+}
+
 /// `flapper frontier --policy policies/final/... --episodes 2 --seed 11`: its longitudinal figures are
 /// `flapper eval`'s (the same library calls on the same starts, at the file's decimals), its energy ratio
 /// is the policy's energy per metre over the scripted gait's, and the scripted gait's own ratio is 1.
