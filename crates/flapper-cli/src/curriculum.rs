@@ -12,9 +12,8 @@ use crate::flag_values::seed;
 
 /// The shipped curriculum, relative to the repository (the default `--config`).
 const SHIPPED_CONFIG: &str = "configs/curriculum.toml";
-/// Stages 4 and 5 alone, to fine-tune a controller on another robot, and the controller to start from.
+/// Stages 4 and 5 alone, to fine-tune a controller (the shipped one) on another robot.
 const TRANSFER_CONFIG: &str = "configs/experiments/curriculum-transfer.toml";
-const SHIPPED_POLICY: &str = "policies/final/policy.safetensors";
 
 #[derive(clap::Args)]
 pub struct CurriculumArgs {
@@ -93,7 +92,7 @@ fn transfer_hint(model: &Path, out: &Path) -> String {
          --config {} --model {} --init-from {} --out {}",
         flapper_report::shipped_file(TRANSFER_CONFIG).display(),
         model.display(),
-        flapper_report::shipped_file(SHIPPED_POLICY).display(),
+        flapper_report::shipped_file(flapper_report::FINAL_POLICY).display(),
         out.with_file_name(format!("{name}-transfer")).display()
     )
 }
