@@ -50,7 +50,8 @@ enum Command {
     Reference(reference::ReferenceArgs),
     /// Train the final controller from scratch: every curriculum stage in turn, each checkpoint judged
     /// on a validation set, the best handed to the next stage, gates that stop a run which does not
-    /// learn. Run again on the same --out to continue after an interruption.
+    /// learn. With --model (a robot of your own), fine-tune the shipped controller on it with stages 4
+    /// and 5 instead, unless --from-scratch. Run again on the same --out to continue after an interruption.
     Curriculum(curriculum::CurriculumArgs),
     /// Train a flight controller with PPO: a progress bar, one CSV row per iteration, learning curves,
     /// checkpoints every few iterations, and the final policy, all in --out.

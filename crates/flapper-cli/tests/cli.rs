@@ -667,8 +667,8 @@ fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
 }
 
 /// A run from scratch on a robot of one's own that stops at a gate ends with one error line that spells out
-/// the fine-tune of the shipped controller on that robot; on the shipped robot, or fine-tuning already, it
-/// does not.
+/// the fine-tune of the shipped controller on that robot (what `--model` runs without `--from-scratch`); on
+/// the shipped robot, given as `--model` or not, it does not.
 #[test]
 fn a_robot_s_run_stopped_at_a_gate_names_the_transfer_command() {
     let text = "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
@@ -677,22 +677,43 @@ fn a_robot_s_run_stopped_at_a_gate_names_the_transfer_command() {
                 gate = { completed_percent = 100 }\ntask = { stage = 1 }\n";
     let (config, out, output) = curriculum_in("curriculum-robot-stopped", text);
     assert_one_line_error(&output, "missed its gate");
-    assert!(!String::from_utf8_lossy(&output.stderr).contains("curriculum-transfer.toml"), "the shipped robot");
+    assert!(!String::from_utf8_lossy(&output.stderr).contains("fine-tuned on it"), "the shipped robot");
 
-    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/flapper.xml").display().to_string();
-    let robot_out = out.with_file_name("robot");
-    let args = ["curriculum", "--model", &model, "--config", config.to_str().unwrap(), "--out"];
-    let output = flapper(&[&args[..], &[robot_out.to_str().unwrap()]].concat());
-    assert_one_line_error(&output, "missed its gate");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    let transfer = format!("--model {model} --init-from ");
-    assert!(
-        stderr.contains("configs/experiments/curriculum-transfer.toml")
-            && stderr.contains(&transfer)
-            && stderr.contains("policies/final/policy.safetensors --out ")
-            && stderr.contains(&format!("{}-transfer", robot_out.display())),
-        "{stderr}"
-    );
+    let repository = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let shipped = repository.join("models/flapper.xml").display().to_string();
+    let heavy = repository.join("examples/robots/heavy.xml").display().to_string();
+    for (model, hint) in [(&shipped, false), (&heavy, true)] {
+        let robot_out = out.with_file_name(if hint { "heavy" } else { "shipped" });
+        let args = ["curriculum", "--model", model, "--config", config.to_str().unwrap(), "--out"];
+        let output = flapper(&[&args[..], &[robot_out.to_str().unwrap()]].concat());
+        assert_one_line_error(&output, "missed its gate");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let transfer = format!(
+            "fine-tuned on it may fly where training from scratch stopped (it trained heavy.xml, wide.xml, narrow.xml and nose-heavy.xml of examples/robots/): flapper curriculum --model {model} --out {}-transfer",
+            robot_out.display()
+        );
+        assert_eq!(stderr.contains(&transfer), hint, "{stderr}");
+    }
+}
+
+/// A robot of one's own given as `--model` alone fine-tunes the shipped controller; a folder a run from
+/// scratch started on it (as `--model` did before 2026-11-29) is refused in one line that names
+/// `--from-scratch`, and nothing in it changes.
+#[test]
+fn a_robot_s_folder_from_scratch_is_continued_with_from_scratch() {
+    let text = "seed = 1\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
+                actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 1\n\
+                validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
+                gate = { completed_percent = 0 }\ntask = { stage = 1 }\n";
+    let (_, out, output) = curriculum_in("curriculum-robot-folder", text);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let saved = std::fs::read(out.join("curriculum.toml")).unwrap();
+    let heavy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/robots/heavy.xml");
+    let output = flapper(&["curriculum", "--model", heavy.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_one_line_error(&output, "has started stage 1 ('cruise') with other settings");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("continues with --from-scratch"));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("fine-tuning the shipped controller"));
+    assert_eq!(std::fs::read(out.join("curriculum.toml")).unwrap(), saved, "the folder unchanged");
 }
 
 /// `flapper frontier --policy policies/final/... --episodes 2 --seed 11`: its longitudinal figures are

@@ -836,7 +836,7 @@ task = { stage = 2 }
         check_budget(&without, "curriculum-without-path-starts.toml");
 
         // A controller fine-tuned on one's own robot: the shipped stages 4 and 5 alone, unchanged.
-        let transfer = shipped("experiments/curriculum-transfer.toml");
+        let transfer = shipped("curriculum-transfer.toml");
         assert_eq!(transfer.stages, five.stages[3..], "stages 4 and 5 as shipped");
         assert_eq!(transfer.max_env_steps, five.max_env_steps);
         check_budget(&transfer, "curriculum-transfer.toml");
