@@ -188,11 +188,11 @@ fn report_progress(event: Progress) {
         Progress::Iteration { stage, log } => {
             if log.iteration.is_multiple_of(10) {
                 eprintln!(
-                    "  stage {stage} it {}  {:.2}M steps  {:.0} steps/s  return {:.1}  std {:.2}  lr {:.1e}",
+                    "  stage {stage} it {}  {:.2}M steps  {:.0} steps/s  return {}  std {:.2}  lr {:.1e}",
                     log.iteration,
                     log.env_steps as f64 / 1e6,
                     log.steps_per_s,
-                    log.mean_return,
+                    crate::progress::episode_mean(log.mean_return, 1),
                     log.update.action_std,
                     log.update.learning_rate
                 );

@@ -40,3 +40,19 @@ impl Progress {
         self.bar.finish_and_clear();
     }
 }
+
+/// A mean over the episodes that ended, for a progress line: "-" when none ended (the mean is NaN then,
+/// which a reader may take for a fault).
+pub fn episode_mean(value: f64, decimals: usize) -> String {
+    if value.is_nan() { "- (no episode ended)".to_owned() } else { format!("{value:.decimals$}") }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_mean_over_no_episodes_reads_as_none_ended() {
+        assert_eq!(super::episode_mean(f64::NAN, 1), "- (no episode ended)");
+        assert_eq!(super::episode_mean(183.46, 1), "183.5");
+        assert_eq!(super::episode_mean(183.46, 0), "183");
+    }
+}

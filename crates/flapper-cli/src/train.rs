@@ -111,11 +111,11 @@ pub fn train_command(
         let ending: Vec<String> =
             ends.iter().zip(&log.end_counts).filter(|(_, c)| **c > 0).map(|(r, c)| format!("{r} {c}")).collect();
         let message = format!(
-            "{:.2}M steps  {:.0} steps/s  return {:.1}  length {:.0}  std {:.2}  ends: {}",
+            "{:.2}M steps  {:.0} steps/s  return {}  length {}  std {:.2}  ends: {}",
             log.env_steps as f64 / 1e6,
             log.steps_per_s,
-            mean(|r| r.0),
-            mean(|r| r.1),
+            crate::progress::episode_mean(mean(|r| r.0), 1),
+            crate::progress::episode_mean(mean(|r| r.1), 0),
             log.update.action_std,
             if ending.is_empty() { "-".into() } else { ending.join(", ") }
         );
