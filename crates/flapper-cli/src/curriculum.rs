@@ -97,8 +97,14 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
     // The command as a reader would type it: `flapper` whatever the binary's file is called.
     let command = std::iter::once("flapper".to_owned()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     if let Some(policy) = &start.init_from {
-        flapper_ppo::checkpoint::load(policy)
-            .with_context(|| format!("--init-from '{}' is not a policy or checkpoint", policy.display()))?;
+        flapper_ppo::checkpoint::load(policy).with_context(|| match start.transfer {
+            true => format!(
+                "the shipped controller '{}', which --model fine-tunes on your robot, is not readable (--from-scratch \
+                 needs none)",
+                policy.display()
+            ),
+            false => format!("--init-from '{}' is not a policy or checkpoint", policy.display()),
+        })?;
     }
     if start.transfer {
         println!(
