@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
+use flapper_curriculum::selection::StageOutcome;
 use flapper_curriculum::summary::Summary;
 use flapper_curriculum::{CurriculumConfig, CurriculumError, CurriculumRequest, Progress, run_curriculum};
 
@@ -179,6 +180,30 @@ fn sibling(out: &Path, suffix: &str) -> PathBuf {
     out.with_file_name(format!("{name}-{suffix}"))
 }
 
+/// What a stage's hand-over line adds when the checkpoint misses a sought bar (`selected.json` says
+/// which), the most important first.
+fn hand_over_warning(outcome: &StageOutcome) -> &'static str {
+    let missed = |met: Option<bool>| met == Some(false);
+    if missed(outcome.randomized_met) && missed(outcome.rms_met) {
+        "; warning: no checkpoint met the randomized entries or the RMS bars within the budget, this one completes \
+         every named reference the best (its scores are in selection.csv)"
+    } else if missed(outcome.randomized_met) {
+        "; warning: no checkpoint met the randomized entries within the budget, this one completes every named \
+         reference the best (its scores are in selection.csv)"
+    } else if missed(outcome.rms_met) {
+        "; warning: no checkpoint met the RMS bars within the budget, this one completes every reference the best \
+         (its errors are in selection.csv)"
+    } else if missed(outcome.flight_modes_met) {
+        "; warning: no checkpoint met the flight-mode bars (energy, glide, flap frequency) within the budget, this \
+         one tracks every reference the most efficiently"
+    } else if missed(outcome.identification_met) {
+        "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar \
+         (its fit is in selection.csv)"
+    } else {
+        ""
+    }
+}
+
 fn report_progress(event: Progress) {
     match event {
         Progress::StageStarts { stage, of, config, iterations, resumed_at } => {
@@ -250,15 +275,7 @@ fn report_progress(event: Progress) {
                     format!(", glide fraction {glide:.2}, energy {energy:.2} x scripted, cruise flap {hz:.2} Hz"),
                 _ => String::new(),
             },
-            match (outcome.rms_met, outcome.flight_modes_met, outcome.identification_met) {
-                (Some(false), _, _) =>
-                    "; warning: no checkpoint met the RMS bars within the budget, this one completes every reference the best (its errors are in selection.csv)",
-                (_, Some(false), _) =>
-                    "; warning: no checkpoint met the flight-mode bars (energy, glide, flap frequency) within the budget, this one tracks every reference the most efficiently",
-                (_, _, Some(false)) =>
-                    "; warning: no checkpoint met the identification bar within the budget, this one flies every other bar (its fit is in selection.csv)",
-                _ => "",
-            }
+            hand_over_warning(outcome)
         ),
         Progress::OptionalStageMissed { missed, kept } => println!(
             "{missed}. The stage is optional: the run ends with stage {}'s controller (iteration {}, {:.1}% completed, RMS {:.3} m), and summary.json records the missed stage (optional_stage_missed)",

@@ -594,29 +594,58 @@ struct HandOver<'a> {
     flight_modes_met: Option<bool>,
     /// `Some(false)` where the RMS bars were sought and not met (`None`: met or not asked).
     rms_met: Option<bool>,
+    /// `Some(false)` where the randomized entries were sought and not met (`None`: met or not asked).
+    randomized_met: Option<bool>,
 }
 
 /// What a stage that will train no more hands over: [`choose`]'s checkpoint, else, where the gate's
 /// flight-mode bars are sought, the most efficient checkpoint that meets every tracking bar from the gate's
 /// `min_iterations` on, else before them (a fine-tuning stage whose budget was cut short still hands over
 /// a controller that tracks, if it ever had one), else, where its RMS bars are sought, the best
-/// checkpoint that completes every reference ([`Selection::best_completing`]).
+/// checkpoint that completes every reference ([`Selection::best_completing`]), else, where its randomized
+/// entries are sought, the best one that completes every named entry ([`Selection::best_completing_named`]).
 fn choose_at_the_end<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Option<HandOver<'a>> {
     if let Some((best, identification_met)) = choose(stage, selection) {
-        return Some(HandOver { best, identification_met, flight_modes_met: None, rms_met: None });
+        return Some(HandOver {
+            best,
+            identification_met,
+            flight_modes_met: None,
+            rms_met: None,
+            randomized_met: None,
+        });
     }
-    let identification_met = stage.gate.identification_fit_percent.map(|_| false);
-    let tracking = selection
-        .most_efficient_tracking(&stage.gate)
-        .or_else(|| selection.most_efficient_tracking_from(&stage.gate, 0))
-        .map(|best| HandOver { best, identification_met, flight_modes_met: Some(false), rms_met: None });
-    tracking.or_else(|| {
-        selection.best_completing(&stage.gate).map(|best| {
-            let modes_met = meets_flight_mode_bars(&stage.gate, best.modes.as_ref());
-            let flight_modes_met = (gate_asks_flight_modes(&stage.gate) && !modes_met).then_some(false);
-            HandOver { best, identification_met, flight_modes_met, rms_met: Some(false) }
+    let gate = &stage.gate;
+    let identification_met = gate.identification_fit_percent.map(|_| false);
+    let flight_modes_met = |best: &Validated| {
+        (gate_asks_flight_modes(gate) && !meets_flight_mode_bars(gate, best.modes.as_ref())).then_some(false)
+    };
+    let tracking = selection.most_efficient_tracking(gate).or_else(|| selection.most_efficient_tracking_from(gate, 0));
+    let tracking = tracking.map(|best| HandOver {
+        best,
+        identification_met,
+        flight_modes_met: Some(false),
+        rms_met: None,
+        randomized_met: None,
+    });
+    let completing = || {
+        selection.best_completing(gate).map(|best| HandOver {
+            best,
+            identification_met,
+            flight_modes_met: flight_modes_met(best),
+            rms_met: Some(false),
+            randomized_met: None,
         })
-    })
+    };
+    let completing_named = || {
+        selection.best_completing_named(gate).map(|best| HandOver {
+            best,
+            identification_met,
+            flight_modes_met: flight_modes_met(best),
+            rms_met: (!best.score.rms_met(gate)).then_some(false),
+            randomized_met: (!best.score.completes(gate)).then_some(false),
+        })
+    };
+    tracking.or_else(completing).or_else(completing_named)
 }
 
 /// The policy a validation of `iteration` judges: the checkpoint itself, or with `averaged` > 1 the
@@ -691,7 +720,7 @@ fn select(
     let chosen = choose_at_the_end(stage, selection);
     let env_steps = last.map_or(0, |l| l.env_steps);
     let wall_time_s = stage_wall_time_s(selection, last.map_or(0.0, |l| l.wall_time_s), iterations);
-    let Some(HandOver { best, identification_met, flight_modes_met, rms_met }) = chosen else {
+    let Some(HandOver { best, identification_met, flight_modes_met, rms_met, randomized_met }) = chosen else {
         let best = selection.best();
         let stopped = StoppedStage {
             stage: number,
@@ -737,6 +766,7 @@ fn select(
         identification_met,
         flight_modes_met,
         rms_met,
+        randomized_met,
         glide_fraction: best.modes.map(|f| f.glide_fraction),
         energy_ratio: best.modes.map(|f| f.energy_ratio),
         cruise_flap_hz: best.modes.map(|f| f.cruise_flap_hz),
@@ -850,6 +880,9 @@ pub fn describe_gate(gate: &Gate) -> String {
     if gate.rms_sought && (gate.max_rms_m.is_some() || !gate.reference_max_rms_m.is_empty()) {
         text.push_str(" (the RMS bars sought: required only while the budget lasts)");
     }
+    if gate.randomized_sought {
+        text.push_str(" (the randomized entries sought: required only while the budget lasts)");
+    }
     if let Some(share) = gate.glide_fraction {
         text.push_str(&format!(
             ", the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
@@ -960,5 +993,49 @@ mod tests {
         // Required again, the same looser checkpoints stop the run.
         let required = StageConfig { gate: Gate { rms_sought: false, ..stage.gate.clone() }, ..stage.clone() };
         assert_eq!(pick_with(&required, looser.to_vec()), None);
+    }
+
+    /// The transfer's stage 4 seeks its randomized entries: a budget spent without them hands over the best
+    /// checkpoint that completes every named entry, marked `randomized_met: false`; the shipped stage 4,
+    /// which requires them, stops instead. Completing a named entry too little still stops both.
+    #[test]
+    fn the_transfer_s_stage_4_hands_over_a_checkpoint_missing_a_randomized_entry_marked_so() {
+        use crate::validation::{ReferenceScore, Score};
+        let with_cruise_rms = |stage: StageConfig| {
+            let gate = Gate { reference_max_rms_m: [("cruise".to_owned(), 0.3)].into(), ..stage.gate.clone() };
+            StageConfig { gate, ..stage }
+        };
+        let shipped = with_cruise_rms(crate::config::shipped("curriculum.toml").stages[3].clone());
+        let transfer = with_cruise_rms(crate::config::shipped("curriculum-transfer.toml").stages[0].clone());
+        assert!(transfer.gate.randomized_sought && !shipped.gate.randomized_sought);
+        // Cruise `completed` of 10 at `rms`, longitudinal under the fluid coefficients `fluid` of 100.
+        let row = |iteration: usize, completed: usize, rms: f64, fluid: usize| {
+            let references = vec![
+                ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms },
+                ReferenceScore { name: "longitudinal~fluid".into(), completed: fluid, episodes: 100, mean_rms_m: 0.3 },
+            ];
+            let completed_percent = 100.0 * (completed + fluid) as f64 / 110.0;
+            let score = Score { completed_percent, mean_rms_m: rms, references };
+            Validated { score, identification_fit_percent: Some([85.0; 3]), ..Validated::of_cruise(iteration, 0, 0.0) }
+        };
+        let pick = |stage: &StageConfig, rows: Vec<Validated>| {
+            let selection = Selection { rows, columns: Default::default() };
+            choose_at_the_end(stage, &selection)
+                .map(|h| (h.best.iteration, h.identification_met, h.rms_met, h.randomized_met))
+        };
+        // Every bar at 400: the gate, for both.
+        let met = vec![row(300, 10, 0.25, 90), row(400, 10, 0.25, 96)];
+        assert_eq!(pick(&shipped, met.clone()), Some((400, Some(true), None, None)));
+        assert_eq!(pick(&transfer, met), Some((400, Some(true), None, None)));
+        // The fluid entry short at every checkpoint: the transfer hands over the best that completes every
+        // named entry (the most episodes completed, randomized ones included, then the least error), marked.
+        let short = vec![row(300, 10, 0.28, 90), row(400, 10, 0.25, 93), row(500, 10, 0.27, 94), row(600, 9, 0.2, 94)];
+        assert_eq!(pick(&shipped, short.clone()), None);
+        assert_eq!(pick(&transfer, short), Some((500, Some(false), None, Some(false))));
+        // Short there and over the (sought) RMS bar as well: both marked.
+        let loose = vec![row(300, 10, 0.36, 90), row(400, 10, 0.33, 93)];
+        assert_eq!(pick(&transfer, loose), Some((400, Some(false), Some(false), Some(false))));
+        // A named entry short, or only before the gate's min_iterations: nothing, the run stops.
+        assert_eq!(pick(&transfer, vec![row(200, 10, 0.25, 90), row(400, 9, 0.25, 93)]), None);
     }
 }

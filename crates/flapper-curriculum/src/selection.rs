@@ -191,6 +191,18 @@ impl Selection {
         best(self.rows.iter().filter(|r| r.iteration >= gate.min_iterations && r.score.completes(gate)))
     }
 
+    /// Where the gate's randomized entries are sought ([`Gate::randomized_sought`]): the best checkpoint
+    /// that completes every named entry from `min_iterations` on and meets the RMS bars unless those are
+    /// sought too, whatever its randomized entries, flight modes and identification. `None` where they
+    /// are required or no checkpoint completes the named entries.
+    pub fn best_completing_named<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
+        if !gate.randomized_sought {
+            return None;
+        }
+        let flies = |r: &&Validated| r.score.completes_named(gate) && (gate.rms_sought || r.score.rms_met(gate));
+        best(self.rows.iter().filter(|r| r.iteration >= gate.min_iterations).filter(flies))
+    }
+
     /// Where the gate's flight-mode bars are sought ([`Gate::flight_modes_required`] unset): among the
     /// checkpoints that meet every tracking bar (from `min_iterations` on), the one that meets the most
     /// flight-mode bars, then flies with the least energy per metre (the best score, then the earliest, of
@@ -393,6 +405,11 @@ pub struct StageOutcome {
     /// its completion bars was handed over ([`crate::config::Gate::rms_sought`]); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rms_met: Option<bool>,
+    /// `false` where no checkpoint met the gate's randomized entries within the budget and the best one
+    /// that completes every named entry was handed over ([`crate::config::Gate::randomized_sought`]);
+    /// absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub randomized_met: Option<bool>,
     /// The selected checkpoint's flight modes ([`crate::flight_modes`]): its glide fraction, energy ratio
     /// and cruise flap frequency; absent where the gate has no flight-mode bar.
     #[serde(default, skip_serializing_if = "Option::is_none")]

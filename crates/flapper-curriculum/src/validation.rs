@@ -197,7 +197,19 @@ impl Score {
     /// Whether the gate's completion bars are met (each entry's share of completed episodes, and the
     /// procedural ones' together), its RMS bars aside.
     pub fn completes(&self, gate: &Gate) -> bool {
-        let judged_alone = |r: &&ReferenceScore| gate.procedural_completed_percent.is_none() || !r.is_procedural();
+        self.completes_entries(gate, true)
+    }
+
+    /// [`Self::completes`] without the randomized entries: every named (and procedural) entry's bar.
+    pub fn completes_named(&self, gate: &Gate) -> bool {
+        self.completes_entries(gate, false)
+    }
+
+    fn completes_entries(&self, gate: &Gate, randomized_too: bool) -> bool {
+        let judged_alone = |r: &&ReferenceScore| {
+            (gate.procedural_completed_percent.is_none() || !r.is_procedural())
+                && (randomized_too || !r.is_randomized())
+        };
         let bar = |r: &ReferenceScore| match gate.randomized_completed_percent {
             Some(randomized) if r.is_randomized() => randomized,
             _ => gate.completed_percent,
