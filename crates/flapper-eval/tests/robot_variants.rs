@@ -176,3 +176,28 @@ fn nose_heavy_robot_has_its_centre_of_mass_10_mm_forward_and_the_scripted_gait_r
 fn tail_heavy_robot_has_its_centre_of_mass_10_mm_back_and_the_scripted_gait_retrimmed_flies_it() {
     assert_centre_of_mass_moved("tail-heavy.xml", -0.010, 0.0);
 }
+
+/// Three changes at once: total mass x(0.338 / 0.310) in the main body, the wingspan 1.0428 m (each wing
+/// 5% longer, the chord and wing masses as shipped), every servo's kp and kv x0.8 (torque limits as
+/// shipped); the scripted gait flies it.
+#[test]
+fn combined_robot_is_heavier_longer_winged_and_softer_at_once_and_the_scripted_gait_flies_it() {
+    let file = "combined.xml";
+    let (shipped, robot) = (RobotModel::flapper().unwrap(), variant(file));
+    let (d0, d) = (shipped.dimensions(), robot.dimensions());
+    assert!(relative(d.total_mass_kg, 0.338) < 1e-3 && relative(d0.total_mass_kg, 0.310) < 1e-3, "{file}");
+    assert!(relative(d.wingspan_m, 1.0428) < 1e-3, "{file}: wingspan {} m", d.wingspan_m);
+    assert!(relative(d.mean_chord_m, d0.mean_chord_m) < 1e-9, "{file}: mean chord {} m", d.mean_chord_m);
+    let (sim0, sim) = (shipped.instantiate().unwrap(), robot.instantiate().unwrap());
+    for body in ["wing_left", "wing_right", "tail"] {
+        assert_eq!(sim.body_mass(body).unwrap(), sim0.body_mass(body).unwrap(), "{file}: {body}");
+    }
+    assert!(relative(sim.body_mass("main_body").unwrap(), 0.254) < 1e-9, "{file}: main body");
+    let (m0, m) = (shipped.mujoco(), robot.mujoco());
+    for (a, (g, g0)) in m.actuator_gainprm().iter().zip(m0.actuator_gainprm()).enumerate() {
+        let (b, b0) = (m.actuator_biasprm()[a], m0.actuator_biasprm()[a]);
+        assert!(relative(g[0], 0.8 * g0[0]) < 1e-9 && relative(b[2], 0.8 * b0[2]) < 1e-9, "{file} actuator {a}");
+        assert_eq!(m.actuator_forcerange()[a], m0.actuator_forcerange()[a], "{file} actuator {a}: torque limits");
+    }
+    assert_scripted_gait_flies(&robot, file);
+}
