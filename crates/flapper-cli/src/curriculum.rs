@@ -39,7 +39,8 @@ pub struct CurriculumArgs {
     init_from: Option<PathBuf>,
     /// With --model: train every stage of configs/curriculum.toml from new networks instead of fine-tuning
     /// the shipped controller on the robot (stages 4 and 5). From scratch, 4 of the 8 robots of
-    /// examples/robots/ got no controller (docs/training.md, "Training your own robot").
+    /// examples/robots/ trained so got no controller; the fine-tune trained those 4 and 2 more
+    /// (docs/training.md, "Training your own robot").
     #[arg(long, conflicts_with = "init_from")]
     from_scratch: bool,
     /// Stop after this stage (1-based); run again without it to go on.
