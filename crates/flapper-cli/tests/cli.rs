@@ -621,6 +621,17 @@ fn export_policy_writes_c_with_its_size_and_latency_and_refuses_bad_input_with_o
     assert_one_line_error(&output, "--format onnx exports one policy, got 2 files");
 }
 
+/// A one-stage curriculum of two tiny environments that trains in a second: `max_iterations`, validated
+/// every iteration on one cruise flight, its gate `completed_percent`.
+fn tiny_curriculum(seed: u64, max_iterations: usize, completed_percent: u32) -> String {
+    format!(
+        "seed = {seed}\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
+         actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = {max_iterations}\n\
+         validate_every = 1\nvalidation = {{ references = [\"cruise\"], episodes = 1 }}\n\
+         gate = {{ completed_percent = {completed_percent} }}\ntask = {{ stage = 1 }}\n"
+    )
+}
+
 /// `flapper curriculum --config DIR/curriculum.toml --out DIR/run` in a fresh scratch folder `name`, with
 /// `text` as the config: the config's path, the run folder and what the command did.
 fn curriculum_in(name: &str, text: &str) -> (PathBuf, PathBuf, Output) {
@@ -649,13 +660,7 @@ fn curriculum_rejects_a_bad_stage_config_with_one_line_naming_the_stage_and_key(
 /// command as a reader would retype it (`flapper ...`, whatever the binary's file is called).
 #[test]
 fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
-    let (config, out, output) = curriculum_in(
-        "curriculum-tiny",
-        "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
-         actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n\
-         validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
-         gate = { completed_percent = 0 }\ntask = { stage = 1 }\n",
-    );
+    let (config, out, output) = curriculum_in("curriculum-tiny", &tiny_curriculum(3, 2, 0));
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.lines().any(|l| l.starts_with("done: 1 stages handed over")), "{stdout}");
@@ -671,10 +676,7 @@ fn curriculum_records_the_command_as_typed_and_says_what_it_handed_over() {
 /// the shipped robot, given as `--model` or not, it does not.
 #[test]
 fn a_robot_s_run_stopped_at_a_gate_names_the_transfer_command() {
-    let text = "seed = 3\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
-                actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 2\n\
-                validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
-                gate = { completed_percent = 100 }\ntask = { stage = 1 }\n";
+    let text = &tiny_curriculum(3, 2, 100);
     let (config, out, output) = curriculum_in("curriculum-robot-stopped", text);
     assert_one_line_error(&output, "missed its gate");
     assert!(!String::from_utf8_lossy(&output.stderr).contains("fine-tuned on it"), "the shipped robot");
@@ -701,10 +703,7 @@ fn a_robot_s_run_stopped_at_a_gate_names_the_transfer_command() {
 /// `--from-scratch`, and nothing in it changes.
 #[test]
 fn a_robot_s_folder_from_scratch_is_continued_with_from_scratch() {
-    let text = "seed = 1\n[runner]\nenvs = 2\nthreads = 1\n[ppo]\nsteps_per_env = 8\nminibatches = 2\n\
-                actor_hidden = [8]\ncritic_hidden = [8]\n[[stages]]\nname = \"cruise\"\nmax_iterations = 1\n\
-                validate_every = 1\nvalidation = { references = [\"cruise\"], episodes = 1 }\n\
-                gate = { completed_percent = 0 }\ntask = { stage = 1 }\n";
+    let text = &tiny_curriculum(1, 1, 0);
     let (_, out, output) = curriculum_in("curriculum-robot-folder", text);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let saved = std::fs::read(out.join("curriculum.toml")).unwrap();

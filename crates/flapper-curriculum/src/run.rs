@@ -627,22 +627,18 @@ fn choose_at_the_end<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Op
         rms_met: None,
         randomized_met: None,
     });
-    let completing = || {
-        selection.best_completing(gate).map(|best| HandOver {
-            best,
-            identification_met,
-            flight_modes_met: flight_modes_met(best),
-            rms_met: Some(false),
-            randomized_met: None,
-        })
+    // A checkpoint handed over with some sought bar unmet, marked so.
+    let marked = |best, rms_met, randomized_met| HandOver {
+        best,
+        identification_met,
+        flight_modes_met: flight_modes_met(best),
+        rms_met,
+        randomized_met,
     };
+    let completing = || selection.best_completing(gate).map(|best| marked(best, Some(false), None));
     let completing_named = || {
-        selection.best_completing_named(gate).map(|best| HandOver {
-            best,
-            identification_met,
-            flight_modes_met: flight_modes_met(best),
-            rms_met: (!best.score.rms_met(gate)).then_some(false),
-            randomized_met: (!best.score.completes(gate)).then_some(false),
+        selection.best_completing_named(gate).map(|best| {
+            marked(best, (!best.score.rms_met(gate)).then_some(false), (!best.score.completes(gate)).then_some(false))
         })
     };
     tracking.or_else(completing).or_else(completing_named)
