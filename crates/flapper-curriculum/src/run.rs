@@ -855,38 +855,43 @@ fn describe_identified(selection: &Selection) -> String {
 
 /// The gate in words, for messages.
 pub fn describe_gate(gate: &Gate) -> String {
-    let mut text = match gate.procedural_completed_percent {
+    // Each bar goes to what the gate requires, or to what it seeks: required while the budget lasts, and
+    // at the budget's end the best checkpoint without it is handed over, marked so (`choose_at_the_end`).
+    let mut required = vec![match gate.procedural_completed_percent {
         None => format!("every validation reference completed in at least {}% of its episodes", gate.completed_percent),
         Some(drawn) => format!(
             "every named validation reference completed in at least {}% of its episodes, the procedural ones in \
              {drawn}% of theirs together",
             gate.completed_percent
         ),
-    };
+    }];
+    let mut sought = Vec::new();
     if let Some(randomized) = gate.randomized_completed_percent {
-        text.push_str(&format!(", each randomized one in at least {randomized}%"));
+        let bar = format!("each randomized entry completed in at least {randomized}% of its episodes");
+        if gate.randomized_sought { sought.push(bar) } else { required.push(bar) }
     }
+    let mut rms_bars = Vec::new();
     if let Some(rms) = gate.max_rms_m {
-        text.push_str(&format!(", mean RMS error at most {rms} m"));
+        rms_bars.push(format!("mean RMS error at most {rms} m"));
     }
     if !gate.reference_max_rms_m.is_empty() {
         let bars: Vec<String> = gate.reference_max_rms_m.iter().map(|(name, bar)| format!("{name} {bar} m")).collect();
-        text.push_str(&format!(", mean RMS error of {}", bars.join(", ")));
+        rms_bars.push(format!("mean RMS error of {}", bars.join(", ")));
     }
-    if gate.rms_sought && (gate.max_rms_m.is_some() || !gate.reference_max_rms_m.is_empty()) {
-        text.push_str(" (the RMS bars sought: required only while the budget lasts)");
+    if gate.rms_sought {
+        sought.extend(rms_bars)
+    } else {
+        required.extend(rms_bars)
     }
-    if gate.randomized_sought {
-        text.push_str(" (the randomized entries sought: required only while the budget lasts)");
-    }
+    let mut flight_mode_bars = Vec::new();
     if let Some(share) = gate.glide_fraction {
-        text.push_str(&format!(
-            ", the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
+        flight_mode_bars.push(format!(
+            "the wings held at least {share} of the longitudinal reference's glide segment (flapper modes)"
         ));
     }
     if let Some(ratio) = gate.max_energy_ratio {
-        text.push_str(&format!(
-            ", the energy per metre along the longitudinal reference at most {ratio} x the scripted gait's"
+        flight_mode_bars.push(format!(
+            "the energy per metre along the longitudinal reference at most {ratio} x the scripted gait's"
         ));
     }
     if let Some([low, high]) = gate.cruise_flap_hz {
@@ -894,17 +899,23 @@ pub fn describe_gate(gate: &Gate) -> String {
             CruiseFlapFlight::LongitudinalSegment => "in its cruise segment",
             CruiseFlapFlight::CruiseReference => "along the cruise reference",
         };
-        text.push_str(&format!(", the flap's fundamental {flight} within {low}-{high} Hz"));
+        flight_mode_bars.push(format!("the flap's fundamental {flight} within {low}-{high} Hz"));
+    }
+    if gate.flight_modes_required {
+        required.extend(flight_mode_bars)
+    } else {
+        sought.extend(flight_mode_bars)
     }
     if let Some(fit) = gate.identification_fit_percent {
-        let how =
-            if gate.identification_required { "required" } else { "sought (required only while the budget lasts)" };
-        text.push_str(&format!(
-            ", and {how} every axis of the identified closed loop (flapper sysid) fitting at least {fit}%"
-        ));
+        let bar = format!("every axis of the identified closed loop (flapper sysid) fitting at least {fit}%");
+        if gate.identification_required { required.push(bar) } else { sought.push(bar) }
+    }
+    let mut text = required.join(", ");
+    if !sought.is_empty() {
+        text.push_str(&format!("; sought (required only while the budget lasts): {}", sought.join(", ")));
     }
     if gate.min_iterations > 0 {
-        text.push_str(&format!(", from iteration {} on", gate.min_iterations));
+        text.push_str(&format!("; from iteration {} on", gate.min_iterations));
     }
     text
 }
@@ -939,6 +950,39 @@ mod tests {
     fn judged(iteration: usize, completed: usize, energy_ratio: f64) -> Validated {
         let modes = Some(ModeFigures { glide_fraction: 0.0, energy_ratio, cruise_flap_hz: 5.0 });
         Validated { modes, ..Validated::of_cruise(iteration, completed, 0.2) }
+    }
+
+    /// The gate in words (the curriculum's stage line, `summary.json`, a stop's message) lists what it
+    /// requires first and what it only seeks after, each bar once.
+    #[test]
+    fn the_gate_in_words_parts_the_bars_it_requires_from_those_it_seeks() {
+        let sought_parts = |text: &str| {
+            text.split_once("; sought (required only while the budget lasts): ")
+                .map(|(required, sought)| (required.to_owned(), sought.to_owned()))
+                .unwrap_or((text.to_owned(), String::new()))
+        };
+        // The transfer's stage 4 seeks its randomized entries, its RMS bars and its identification.
+        let transfer = crate::config::shipped("curriculum-transfer.toml").stages[0].gate.clone();
+        let (required, sought) = sought_parts(&describe_gate(&transfer));
+        assert!(required.starts_with("every validation reference completed in at least 95%"), "{required}");
+        for bar in ["each randomized entry completed in at least 95%", "mean RMS error of cruise 0.3 m", "identified"] {
+            assert!(sought.contains(bar) && !required.contains(bar), "{bar} sought: {sought} | {required}");
+        }
+        assert!(sought.ends_with("; from iteration 300 on"), "{sought}");
+        // Required instead, the same bars move to the required part.
+        let strict = Gate { randomized_sought: false, rms_sought: false, identification_required: true, ..transfer };
+        let (required, sought) = sought_parts(&describe_gate(&strict));
+        assert!(sought.is_empty() && required.contains("randomized") && required.contains("identified"), "{required}");
+        // The efficient stage seeks its flight-mode bars; required, they are listed with the tracking.
+        let efficient = crate::config::shipped("curriculum.toml").stages[4].gate.clone();
+        let (required, sought) = sought_parts(&describe_gate(&efficient));
+        assert!(sought.contains("at most 1.2 x the scripted gait's") && sought.contains("within 4-6 Hz"), "{sought}");
+        assert!(!required.contains("scripted gait"), "{required}");
+        let (required, _) = sought_parts(&describe_gate(&Gate { flight_modes_required: true, ..efficient }));
+        assert!(required.contains("at most 1.2 x the scripted gait's"), "{required}");
+        // A gate of completion alone says so and nothing more.
+        let first = crate::config::shipped("curriculum.toml").stages[0].gate.clone();
+        assert_eq!(describe_gate(&first), "every validation reference completed in at least 90% of its episodes");
     }
 
     #[test]
