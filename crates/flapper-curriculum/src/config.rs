@@ -749,6 +749,45 @@ task = { stage = 2 }
         check_budget(&c, "curriculum.toml");
     }
 
+    /// Every config under configs/ reads: each curriculum (a file with `[[stages]]` or `extends`) builds
+    /// every stage's `flapper train` config (the shipped ones within the paper's 30 M steps), each
+    /// `flapper train` config loads, and each experiment has its line in configs/experiments/README.md.
+    #[test]
+    fn every_config_the_repository_holds_reads_and_each_experiment_is_listed() {
+        let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
+        let listed = std::fs::read_to_string(configs.join("experiments/README.md")).unwrap();
+        let mut curricula = 0;
+        for folder in [configs.clone(), configs.join("experiments")] {
+            for entry in std::fs::read_dir(&folder).unwrap() {
+                let path = entry.unwrap().path();
+                if path.extension().is_none_or(|e| e != "toml") {
+                    continue;
+                }
+                let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                let text = std::fs::read_to_string(&path).unwrap();
+                if text.lines().any(|l| l.starts_with("[[stages]]") || l.starts_with("extends")) {
+                    let c = CurriculumConfig::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+                    for k in 1..=c.stages.len() {
+                        c.stage_train_config(k).unwrap_or_else(|e| panic!("{name}, stage {k}: {e}"));
+                    }
+                    if folder == configs {
+                        check_budget(&c, &name); // an experiment may spend more (curriculum-restart-stalled.toml)
+                    }
+                    curricula += 1;
+                } else {
+                    TrainConfig::load(&path, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+                }
+                if folder.ends_with("experiments") {
+                    assert!(
+                        listed.contains(&format!("`{name}`")),
+                        "{name} has no line in configs/experiments/README.md"
+                    );
+                }
+            }
+        }
+        assert!(curricula >= 2, "the shipped curriculum and the transfer at least: {curricula}");
+    }
+
     #[test]
     fn the_experiments_build_on_the_shipped_curriculum_and_read() {
         // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
