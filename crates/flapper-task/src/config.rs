@@ -172,6 +172,12 @@ pub struct RewardConfig {
     /// top: by default the range under which `flapper modes` counts the wing as held.
     #[serde(skip_serializing_if = "is_default_glide_hold_scale_deg")]
     pub glide_hold_scale_deg: f64,
+    /// Pays r_glide_hold only where the path runs straight: above 0, its glide share is weighed by
+    /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead (deg/s, as
+    /// `smoothness_turn_scale_degps`), so that a sinking turn, which needs the stroke, is not paid for a
+    /// held wing. 0 (the default, left out of a written config) pays every glide slope alike.
+    #[serde(skip_serializing_if = "is_default_glide_hold_turn_scale_degps")]
+    pub glide_hold_turn_scale_degps: f64,
     /// Not a reward term: where the learner's smoothness term (`ppo.smoothness_coef`) applies. Above 0,
     /// each step's weight of it is exp(-(w / scale)^2), w the fastest turn of the reference path over
     /// the observed lookahead (deg/s), so that a steady stroke is asked on straight and gently curving
@@ -244,6 +250,10 @@ fn is_default_flap_rate_glide_share(value: &f64) -> bool {
 
 fn is_default_glide_hold_weight(value: &f64) -> bool {
     *value == RewardConfig::default().glide_hold_weight
+}
+
+fn is_default_glide_hold_turn_scale_degps(value: &f64) -> bool {
+    *value == RewardConfig::default().glide_hold_turn_scale_degps
 }
 
 fn is_default_glide_hold_scale_deg(value: &f64) -> bool {
@@ -451,6 +461,7 @@ impl Default for RewardConfig {
             flap_rate_glide_share: 1.0,
             glide_hold_weight: 0.0,
             glide_hold_scale_deg: crate::flap_rhythm::HELD_FLAP_RANGE_DEG,
+            glide_hold_turn_scale_degps: 0.0,
             smoothness_turn_scale_degps: 0.0,
             smoothness_min_speed_mps: 0.0,
             smoothness_glide_gain: 0.0,
@@ -667,6 +678,7 @@ impl TaskConfig {
             ("reward.glide_hold_weight", r.glide_hold_weight, 0.0, 1e3),
             ("reward.glide_hold_scale_deg", r.glide_hold_scale_deg, 1e-3, 360.0),
             ("reward.smoothness_turn_scale_degps", r.smoothness_turn_scale_degps, 0.0, 1e5),
+            ("reward.glide_hold_turn_scale_degps", r.glide_hold_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_min_speed_mps", r.smoothness_min_speed_mps, 0.0, 50.0),
             ("reward.energy_min_speed_mps", r.energy_min_speed_mps, 0.0, 50.0),
             ("reward.smoothness_glide_gain", r.smoothness_glide_gain, 0.0, 1e3),

@@ -462,9 +462,17 @@ impl FlightEnv {
 
     /// How much the reference glides at the current step, for r_glide_hold: its sink rate over
     /// [`GLIDE_SINK_MPS`] (at most 1) where it sinks at a slope the robot can glide, 0 on level paths,
-    /// climbs and steeper dives.
+    /// climbs and steeper dives; weighed by exp(-(w / scale)^2) for the turns ahead where
+    /// `reward.glide_hold_turn_scale_degps` is set (w as in [`Self::smoothness_weight`]).
     pub fn glide_share(&self) -> f64 {
-        self.slope_factor(1.0, 1.0) - 1.0
+        let share = self.slope_factor(1.0, 1.0) - 1.0;
+        let scale = self.config.reward.glide_hold_turn_scale_degps;
+        if scale > 0.0 && share > 0.0 {
+            let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
+            share * (-(turn / scale).powi(2)).exp()
+        } else {
+            share
+        }
     }
 
     /// A reward term's factor for the slope the reference flies at the current step: 1 +

@@ -247,6 +247,32 @@ fn the_glide_share_rises_with_the_sink_to_a_glide_slope_and_is_zero_elsewhere() 
 }
 
 #[test]
+fn a_turn_ahead_takes_the_glide_share_only_where_its_turn_scale_is_set() {
+    // The glide slope of the test above, flown on a helix turning at 60 deg/s (radius 3.63 m).
+    let radius = 3.8 / 60f64.to_radians();
+    let points = (0..=100)
+        .map(|k| {
+            let angle = 60f64.to_radians() * 0.02 * k as f64;
+            Vec3::new(radius * angle.sin(), radius * (1.0 - angle.cos()), 10.0 - 0.83 * 0.02 * k as f64)
+        })
+        .collect();
+    let helix = Arc::new(Reference::new("sinking turn", 0.02, points));
+    let share = |scale: f64, reference: Arc<Reference>| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.glide_hold_turn_scale_degps = scale;
+        env_on(config, reference).glide_share()
+    };
+    assert!((share(0.0, helix.clone()) - 1.0).abs() < 1e-3, "unset: a sinking turn glides in full");
+    // At the turn's own rate the share falls to about 1/e (the path's direction turns at 60 deg/s
+    // times the cosine of its 12 deg slope); a straight glide slope keeps it whole.
+    let turn_degps = 60.0 * (0.83f64 / 3.8).atan().cos();
+    let expected = (-(turn_degps / 60.0).powi(2)).exp();
+    assert!((share(60.0, helix.clone()) - expected).abs() < 2e-3, "{} against {expected}", share(60.0, helix.clone()));
+    assert!(share(20.0, helix) < 1e-3);
+    assert!((share(20.0, sloped(-0.83)) - 1.0).abs() < 1e-4, "a straight glide slope");
+}
+
+#[test]
 fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();
