@@ -436,8 +436,7 @@ impl FlightEnv {
         let reward = &self.config.reward;
         let mut weight = 1.0;
         if reward.smoothness_turn_scale_degps > 0.0 {
-            let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
-            weight *= (-(turn / reward.smoothness_turn_scale_degps).powi(2)).exp();
+            weight *= self.turn_weight(reward.smoothness_turn_scale_degps);
         }
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         let stop = reward.smoothness_glide_stop_before_dive_s;
@@ -467,12 +466,14 @@ impl FlightEnv {
     pub fn glide_share(&self) -> f64 {
         let share = self.slope_factor(1.0, 1.0) - 1.0;
         let scale = self.config.reward.glide_hold_turn_scale_degps;
-        if scale > 0.0 && share > 0.0 {
-            let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
-            share * (-(turn / scale).powi(2)).exp()
-        } else {
-            share
-        }
+        if scale > 0.0 && share > 0.0 { share * self.turn_weight(scale) } else { share }
+    }
+
+    /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead (deg/s):
+    /// 1 on a straight path, 1/e where it turns at `scale`.
+    fn turn_weight(&self, scale_degps: f64) -> f64 {
+        let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
+        (-(turn / scale_degps).powi(2)).exp()
     }
 
     /// A reward term's factor for the slope the reference flies at the current step: 1 +
