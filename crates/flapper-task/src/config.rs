@@ -221,6 +221,14 @@ pub struct RewardConfig {
     /// (sinking faster than horizontal speed / [`GLIDE_MIN_RATIO`]), where the robot must flap to brake
     /// and hold the path: 1 prices it as everywhere, 0 not at all (r_energy reads 1 there).
     pub energy_dive_share: f64,
+    /// Lifts the energy's price in turns: above 0, each step's price is weighed by exp(-(w / scale)^2),
+    /// w the fastest turn of the reference over the observed lookahead (deg/s, as
+    /// `smoothness_turn_scale_degps`), so that a sharp turn, which needs a strong asymmetric stroke, is
+    /// not taught to save power there (the held wing of a gliding stage 5 flew the sharp turn unbanked:
+    /// docs/experiments.md, "The held wing paid inside the efficient stage"). 0 (the default, left out of
+    /// a written config) prices every turn alike.
+    #[serde(skip_serializing_if = "is_default_energy_turn_scale_degps")]
+    pub energy_turn_scale_degps: f64,
     /// Weighs r_pos more where the reference dives steeper than a glide slope (the dives of
     /// `energy_dive_share`): r_pos times 1 + this gain there, times 1 on level paths, climbs and glide
     /// slopes. A stage that learns to hold its wings on glide slopes can hold them in a dive too, where the
@@ -250,6 +258,10 @@ fn is_default_flap_rate_glide_share(value: &f64) -> bool {
 
 fn is_default_glide_hold_weight(value: &f64) -> bool {
     *value == RewardConfig::default().glide_hold_weight
+}
+
+fn is_default_energy_turn_scale_degps(value: &f64) -> bool {
+    *value == RewardConfig::default().energy_turn_scale_degps
 }
 
 fn is_default_glide_hold_turn_scale_degps(value: &f64) -> bool {
@@ -470,6 +482,7 @@ impl Default for RewardConfig {
             energy_min_speed_mps: 0.0,
             energy_glide_gain: 0.0,
             energy_dive_share: 1.0,
+            energy_turn_scale_degps: 0.0,
             position_dive_gain: 0.0,
         }
     }
@@ -685,6 +698,7 @@ impl TaskConfig {
             ("reward.smoothness_glide_stop_before_dive_s", r.smoothness_glide_stop_before_dive_s, 0.0, 60.0),
             ("reward.energy_glide_gain", r.energy_glide_gain, 0.0, 1e3),
             ("reward.energy_dive_share", r.energy_dive_share, 0.0, 1.0),
+            ("reward.energy_turn_scale_degps", r.energy_turn_scale_degps, 0.0, 1e5),
             ("reward.smoothness_dive_share", r.smoothness_dive_share, 0.0, 1.0),
             ("reward.position_dive_gain", r.position_dive_gain, 0.0, 1e3),
             ("randomization.episode_fraction", g.episode_fraction, 0.0, 1.0),

@@ -323,7 +323,8 @@ impl FlightEnv {
                 action_change,
                 flap_hz: self.flap_rhythm.frequency_hz(time),
                 flap_swing_deg: self.flap_swing.range_deg(),
-                glide_share: self.glide_share(),
+                // Read only where r_glide_hold is weighed: it looks along the lookahead for turns.
+                glide_share: if self.config.reward.glide_hold_weight > 0.0 { self.glide_share() } else { 0.0 },
             },
         )
         .with_position_weighed(self.position_factor())
@@ -411,13 +412,17 @@ impl FlightEnv {
     }
 
     /// The share of the energy's price paid at the current step: the speed ramp of
-    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times the
-    /// [`Self::slope_factor`] of `reward.energy_glide_gain` and `reward.energy_dive_share`.
+    /// `reward.energy_min_speed_mps` at the reference's speed (1 where that is 0), times exp(-(w /
+    /// scale)^2) for the turns ahead where `reward.energy_turn_scale_degps` is set (w as in
+    /// [`Self::smoothness_weight`]), times the [`Self::slope_factor`] of `reward.energy_glide_gain` and
+    /// `reward.energy_dive_share`.
     pub fn energy_price_share(&self) -> f64 {
         let reward = &self.config.reward;
         let min_speed = reward.energy_min_speed_mps;
         let share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
-        share * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
+        let turns =
+            if reward.energy_turn_scale_degps > 0.0 { self.turn_weight(reward.energy_turn_scale_degps) } else { 1.0 };
+        share * turns * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
     }
 
     /// r_pos's factor at the current step: 1 + `reward.position_dive_gain` where the reference dives

@@ -273,6 +273,38 @@ fn a_turn_ahead_takes_the_glide_share_only_where_its_turn_scale_is_set() {
 }
 
 #[test]
+fn a_turn_ahead_lifts_the_energy_price_only_where_its_turn_scale_is_set() {
+    // A level turn at 120 deg/s (a sharp turn's rate) and a straight level path, both at 3.8 m/s.
+    let radius = 3.8 / 120f64.to_radians();
+    let points = (0..=100)
+        .map(|k| {
+            let angle = 120f64.to_radians() * 0.02 * k as f64;
+            Vec3::new(radius * angle.sin(), radius * (1.0 - angle.cos()), 10.0)
+        })
+        .collect();
+    let turn = Arc::new(Reference::new("level turn", 0.02, points));
+    let priced = |scale: f64, reference: Arc<Reference>| {
+        let mut config = TaskConfig::default();
+        config.reward.energy_turn_scale_degps = scale;
+        stroke_priced(config, reference)
+    };
+    let (unset, unset_step) = priced(0.0, turn.clone());
+    assert_eq!(unset, 1.0, "unset: a turn is priced as a straight path");
+    let (at_rate, _) = priced(120.0, turn.clone());
+    assert!((at_rate - (-1f64).exp()).abs() < 2e-3, "at the turn's own rate about 1/e, not {at_rate}");
+    let (sharp, sharp_step) = priced(30.0, turn);
+    assert!(sharp < 1e-6, "a turn at four times the scale is not priced: {sharp}");
+    assert!(
+        sharp_step.terms.energy > unset_step.terms.energy,
+        "the same stroke earns more of r_energy where its price is lifted ({} against {})",
+        sharp_step.terms.energy,
+        unset_step.terms.energy
+    );
+    let (straight, _) = priced(30.0, sloped(0.0));
+    assert_eq!(straight, 1.0, "a straight path keeps its whole price");
+}
+
+#[test]
 fn an_unpowered_robot_ends_too_far_from_a_climbing_target() {
     // A reference climbing at 3 m/s: a glider falls behind and is terminated, not truncated.
     let points = (0..2000).map(|k| Vec3::new(3.8 * 0.02 * k as f64, 0.0, 10.0 + 3.0 * 0.02 * k as f64)).collect();
