@@ -41,6 +41,19 @@ fn sloped(vertical: f64) -> Arc<Reference> {
     Arc::new(Reference::new(format!("slope {vertical}"), 0.02, points))
 }
 
+/// A path at 3.8 m/s turning left at `rate_degps` and sinking (or climbing) at `vertical` m/s, 2 s (dt 0.02 s).
+fn turning(rate_degps: f64, vertical: f64) -> Arc<Reference> {
+    let rate = rate_degps.to_radians();
+    let radius = 3.8 / rate;
+    let points = (0..=100)
+        .map(|k| {
+            let angle = rate * 0.02 * k as f64;
+            Vec3::new(radius * angle.sin(), radius * (1.0 - angle.cos()), 10.0 + vertical * 0.02 * k as f64)
+        })
+        .collect();
+    Arc::new(Reference::new(format!("turn {rate_degps} deg/s, vertical {vertical}"), 0.02, points))
+}
+
 /// The energy's price share at the start of `reference` under `config` (from the exact start), and the
 /// fifth step of a full stroke, when the joints work and the energy kernel is well below its top.
 fn stroke_priced(config: TaskConfig, reference: Arc<Reference>) -> (f64, flapper_task::env::StepResult) {
@@ -249,14 +262,7 @@ fn the_glide_share_rises_with_the_sink_to_a_glide_slope_and_is_zero_elsewhere() 
 #[test]
 fn a_turn_ahead_takes_the_glide_share_only_where_its_turn_scale_is_set() {
     // The glide slope of the test above, flown on a helix turning at 60 deg/s (radius 3.63 m).
-    let radius = 3.8 / 60f64.to_radians();
-    let points = (0..=100)
-        .map(|k| {
-            let angle = 60f64.to_radians() * 0.02 * k as f64;
-            Vec3::new(radius * angle.sin(), radius * (1.0 - angle.cos()), 10.0 - 0.83 * 0.02 * k as f64)
-        })
-        .collect();
-    let helix = Arc::new(Reference::new("sinking turn", 0.02, points));
+    let helix = turning(60.0, -0.83);
     let share = |scale: f64, reference: Arc<Reference>| {
         let mut config = exact_start(TaskConfig::default());
         config.reward.glide_hold_turn_scale_degps = scale;
@@ -275,14 +281,7 @@ fn a_turn_ahead_takes_the_glide_share_only_where_its_turn_scale_is_set() {
 #[test]
 fn a_turn_ahead_lifts_the_energy_price_only_where_its_turn_scale_is_set() {
     // A level turn at 120 deg/s (a sharp turn's rate) and a straight level path, both at 3.8 m/s.
-    let radius = 3.8 / 120f64.to_radians();
-    let points = (0..=100)
-        .map(|k| {
-            let angle = 120f64.to_radians() * 0.02 * k as f64;
-            Vec3::new(radius * angle.sin(), radius * (1.0 - angle.cos()), 10.0)
-        })
-        .collect();
-    let turn = Arc::new(Reference::new("level turn", 0.02, points));
+    let turn = turning(120.0, 0.0);
     let priced = |scale: f64, reference: Arc<Reference>| {
         let mut config = TaskConfig::default();
         config.reward.energy_turn_scale_degps = scale;
