@@ -420,9 +420,9 @@ impl FlightEnv {
         let reward = &self.config.reward;
         let min_speed = reward.energy_min_speed_mps;
         let share = if min_speed > 0.0 { speed_ramp(min_speed, self.reference.speed(self.step)) } else { 1.0 };
-        let turns =
-            if reward.energy_turn_scale_degps > 0.0 { self.turn_weight(reward.energy_turn_scale_degps) } else { 1.0 };
-        share * turns * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
+        share
+            * self.turn_weight(reward.energy_turn_scale_degps)
+            * self.slope_factor(reward.energy_glide_gain, reward.energy_dive_share)
     }
 
     /// r_pos's factor at the current step: 1 + `reward.position_dive_gain` where the reference dives
@@ -439,10 +439,7 @@ impl FlightEnv {
     /// [`Self::slope_factor`] of `reward.smoothness_glide_gain` and `reward.smoothness_dive_share`.
     pub fn smoothness_weight(&self) -> f32 {
         let reward = &self.config.reward;
-        let mut weight = 1.0;
-        if reward.smoothness_turn_scale_degps > 0.0 {
-            weight *= self.turn_weight(reward.smoothness_turn_scale_degps);
-        }
+        let mut weight = self.turn_weight(reward.smoothness_turn_scale_degps);
         weight *= speed_ramp(reward.smoothness_min_speed_mps, self.reference.speed(self.step));
         let stop = reward.smoothness_glide_stop_before_dive_s;
         let glide_gain = if stop > 0.0 && self.dives_within_s(stop) { 0.0 } else { reward.smoothness_glide_gain };
@@ -470,13 +467,16 @@ impl FlightEnv {
     /// `reward.glide_hold_turn_scale_degps` is set (w as in [`Self::smoothness_weight`]).
     pub fn glide_share(&self) -> f64 {
         let share = self.slope_factor(1.0, 1.0) - 1.0;
-        let scale = self.config.reward.glide_hold_turn_scale_degps;
-        if scale > 0.0 && share > 0.0 { share * self.turn_weight(scale) } else { share }
+        if share > 0.0 { share * self.turn_weight(self.config.reward.glide_hold_turn_scale_degps) } else { share }
     }
 
     /// exp(-(w / scale)^2), w the fastest turn of the reference over the observed lookahead (deg/s):
-    /// 1 on a straight path, 1/e where it turns at `scale`.
+    /// 1 on a straight path, 1/e where it turns at `scale`; exactly 1 where the scale is 0 (unset), so a
+    /// term multiplied by it keeps its bits and the lookahead is not read.
     fn turn_weight(&self, scale_degps: f64) -> f64 {
+        if scale_degps <= 0.0 {
+            return 1.0;
+        }
         let turn = self.reference.fastest_turn_degps(self.step, self.config.observation.lookahead_steps);
         (-(turn / scale_degps).powi(2)).exp()
     }
