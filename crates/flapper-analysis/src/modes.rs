@@ -36,7 +36,7 @@ pub const GLIDE_WINDOW_S: f64 = 0.4;
 /// A segment glides when at least this share of its time is spent gliding.
 pub const GLIDING_SEGMENT_FRACTION: f64 = 0.5;
 /// The launch transient left out of the first segment (s).
-const SETTLE_S: f64 = 2.0;
+pub const SETTLE_S: f64 = 2.0;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SegmentFigures {
@@ -269,6 +269,88 @@ fn draw_modes(svg: &Path, steps: &[TrackingStep], held: &[bool], report: &ModesR
     flapper_plot::draw(svg, (1200, 1400), &panels, (4, 1))
 }
 
+/// The indices of the steps inside a segment, after the launch transient.
+fn segment_indices(steps: &[TrackingStep], start_s: f64, end_s: f64) -> Vec<usize> {
+    (0..steps.len()).filter(|&k| steps[k].time_s >= start_s.max(SETTLE_S) && steps[k].time_s < end_s).collect()
+}
+
+/// One segment of the longitudinal reference over many flights from randomized starts (`flapper eval
+/// --reference longitudinal`): [`SegmentFigures`]' power, energy and glide, and the tracking error, each
+/// the mean over the flights that flew the segment to its end (each flight weighed alike), where `flapper
+/// modes` reads one flight from the exact start.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SegmentOverFlights {
+    pub segment: &'static str,
+    pub start_s: f64,
+    pub end_s: f64,
+    /// The flights that flew the segment to its end, and all flown.
+    pub flights: usize,
+    pub episodes: usize,
+    #[serde(serialize_with = "flapper_files::decimals::fixed::<2, _>")]
+    pub mean_absolute_power_w: f64,
+    #[serde(serialize_with = "flapper_files::decimals::fixed::<3, _>")]
+    pub mean_error_m: f64,
+    #[serde(serialize_with = "flapper_files::decimals::fixed::<3, _>")]
+    pub energy_per_metre_j: f64,
+    #[serde(serialize_with = "flapper_files::decimals::fixed::<3, _>")]
+    pub glide_fraction: f64,
+}
+
+/// Each of [`SEGMENTS`] over `flights` (the longitudinal reference flown from many starts, a control
+/// step `dt_s` apart); NaN figures for a segment no flight flew to its end.
+pub fn segments_over_flights(flights: &[EpisodeResult], dt_s: f64) -> Vec<SegmentOverFlights> {
+    let flap = ActuatedJoint::FlapLeft.index();
+    let measured: Vec<(&EpisodeResult, Vec<bool>)> = flights
+        .iter()
+        .map(|flight| {
+            let angles: Vec<f64> = flight.steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
+            (flight, held_wings(&angles, dt_s))
+        })
+        .collect();
+    SEGMENTS
+        .iter()
+        .map(|&(segment, start_s, end_s)| {
+            // Flown to its end: a step within one control period of it.
+            let through: Vec<&(&EpisodeResult, Vec<bool>)> =
+                measured.iter().filter(|(f, _)| f.steps.last().is_some_and(|s| s.time_s >= end_s - dt_s)).collect();
+            let per_flight: Vec<(SegmentFigures, f64)> = through
+                .iter()
+                .map(|(flight, held)| {
+                    let figures = segment_figures(&flight.steps, held, dt_s, segment, start_s, end_s);
+                    let inside = segment_indices(&flight.steps, start_s, end_s);
+                    let error =
+                        inside.iter().map(|&k| flight.steps[k].error_m).sum::<f64>() / inside.len().max(1) as f64;
+                    (figures, error)
+                })
+                .collect();
+            let mean = |value: &dyn Fn(&(SegmentFigures, f64)) -> f64| {
+                if per_flight.is_empty() {
+                    f64::NAN
+                } else {
+                    per_flight.iter().map(value).sum::<f64>() / per_flight.len() as f64
+                }
+            };
+            SegmentOverFlights {
+                segment,
+                start_s,
+                end_s,
+                flights: per_flight.len(),
+                episodes: flights.len(),
+                mean_absolute_power_w: mean(&|(f, _)| f.mean_absolute_power_w),
+                mean_error_m: mean(&|(_, error)| *error),
+                energy_per_metre_j: mean(&|(f, _)| f.energy_per_metre_j),
+                glide_fraction: mean(&|(f, _)| f.glide_fraction),
+            }
+        })
+        .collect()
+}
+
+/// `segments.csv`: [`segments_over_flights`]' rows.
+pub fn write_segments_csv(path: &Path, rows: &[SegmentOverFlights]) -> Result<(), AnalysisError> {
+    flapper_files::write_csv_records(path, rows)
+        .map_err(|e| AnalysisError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
 /// One segment's figures from the steps inside it (after the launch transient).
 fn segment_figures(
     steps: &[TrackingStep],
@@ -278,8 +360,7 @@ fn segment_figures(
     start_s: f64,
     end_s: f64,
 ) -> SegmentFigures {
-    let inside_at = |k: &usize| steps[*k].time_s >= start_s.max(SETTLE_S) && steps[*k].time_s < end_s;
-    let indices: Vec<usize> = (0..steps.len()).filter(inside_at).collect();
+    let indices = segment_indices(steps, start_s, end_s);
     let inside: Vec<&TrackingStep> = indices.iter().map(|&k| &steps[k]).collect();
     let flap = ActuatedJoint::FlapLeft.index();
     let angles: Vec<f64> = inside.iter().map(|s| s.joint_positions_rad[flap]).collect();
@@ -337,6 +418,73 @@ mod tests {
         let share = held.iter().filter(|&&h| h).count() as f64 / held.len() as f64;
         // The window's half (0.2 s) after the wings stop still sees the last flap.
         assert!((share - (4.0 - 0.2) / 8.0).abs() < 0.005, "{share}");
+    }
+
+    /// A flight of `seconds` at 4 m/s along x with 10 W of absolute power and an error of `error_m`,
+    /// flapping 50 deg at 5 Hz before `held_from_s` and holding its wing after.
+    fn flight(seconds: f64, held_from_s: f64, error_m: f64) -> EpisodeResult {
+        let dt = 0.02;
+        let steps = (0..=(seconds / dt).round() as usize)
+            .map(|k| {
+                let t = k as f64 * dt;
+                let mut joints = [0.0; flapper_sim::N_ACTUATED_JOINTS];
+                if t < held_from_s {
+                    joints[ActuatedJoint::FlapLeft.index()] =
+                        50f64.to_radians() * (std::f64::consts::TAU * 5.0 * t).sin();
+                }
+                TrackingStep {
+                    episode: 0,
+                    time_s: t,
+                    position_m: flapper_sim::Vec3::new(4.0 * t, 0.0, 0.0),
+                    target_m: flapper_sim::Vec3::new(4.0 * t + error_m, 0.0, 0.0),
+                    error_m,
+                    airspeed_mps: 4.0,
+                    euler_rad: [0.0; 3],
+                    joint_positions_rad: joints,
+                    joint_velocities_radps: [0.0; flapper_sim::N_ACTUATED_JOINTS],
+                    joint_targets_rad: joints,
+                    mechanical_power_w: 10.0,
+                    absolute_power_w: 10.0,
+                }
+            })
+            .collect();
+        let end = if seconds >= 24.0 {
+            flapper_task::termination::EpisodeEnd::ReferenceEnd
+        } else {
+            flapper_task::termination::EpisodeEnd::TooFarFromTarget
+        };
+        EpisodeResult { end, steps, wind_mps: flapper_sim::Vec3::ZERO }
+    }
+
+    #[test]
+    fn segments_over_flights_weigh_each_flight_that_flew_the_segment_alike() {
+        // One flight glides from 12 s on; one flaps to the end; one falls at 10 s, inside the climb.
+        let flights = [flight(24.0, 12.0, 0.1), flight(24.0, 99.0, 0.3), flight(10.0, 99.0, 0.5)];
+        let rows = segments_over_flights(&flights, 0.02);
+        let names: Vec<&str> = rows.iter().map(|r| r.segment).collect();
+        assert_eq!(names, ["cruise", "climb", "glide", "dive"]);
+        assert_eq!(rows.iter().map(|r| (r.flights, r.episodes)).collect::<Vec<_>>(), [(3, 3), (2, 3), (2, 3), (2, 3)]);
+        // The fallen flight counts in the cruise only.
+        assert!((rows[0].mean_error_m - 0.3).abs() < 1e-12, "{}", rows[0].mean_error_m);
+        assert!((rows[1].mean_error_m - 0.2).abs() < 1e-12, "{}", rows[1].mean_error_m);
+        // 10 W at 4 m/s: 2.5 J/m in every segment (n steps' energy over n - 1 steps' distance: 1% more).
+        for row in &rows {
+            assert!((row.mean_absolute_power_w - 10.0).abs() < 1e-12, "{row:?}");
+            assert!((row.energy_per_metre_j - 2.5).abs() < 0.02, "{row:?}");
+        }
+        // The gliding flight holds its wing over the glide segment but the window's half after 12 s; the
+        // other flaps: a mean of about one half. The dive: one flight held throughout, one flapping.
+        assert_eq!(rows[1].glide_fraction, 0.0);
+        let glide = rows[2].glide_fraction;
+        assert!((glide - 0.5 * (6.0 - 0.2) / 6.0).abs() < 0.01, "{glide}");
+        assert!((rows[3].glide_fraction - 0.5).abs() < 1e-12, "{}", rows[3].glide_fraction);
+    }
+
+    #[test]
+    fn a_segment_no_flight_reached_reads_nan() {
+        let rows = segments_over_flights(&[flight(5.0, 99.0, 0.1)], 0.02);
+        assert_eq!(rows[0].flights, 0);
+        assert!(rows.iter().all(|r| r.mean_absolute_power_w.is_nan() && r.glide_fraction.is_nan()));
     }
 
     #[test]

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
+use flapper_analysis::modes::{SETTLE_S, SegmentOverFlights, segments_over_flights, write_segments_csv};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{TrackingController, evaluate_tracking};
@@ -64,6 +65,7 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         episodes
     );
     let mut summaries = Vec::new();
+    let mut segments = Vec::new();
     for (name, controller, task) in &controllers {
         let began = std::time::Instant::now();
         let results = evaluate_tracking(robot, controller, task, reference.clone(), episodes, seed)?;
@@ -73,6 +75,11 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;
+        if reference.name() == LONGITUDINAL {
+            let per_segment = segments_over_flights(&results, period);
+            write_segments_csv(&dir.join("segments.csv"), &per_segment)?;
+            segments.push((*name, per_segment));
+        }
         if observations {
             let (_, record) =
                 flapper_eval::tracking::record_episode(robot, controller, task, reference.clone(), seed, 0)?;
@@ -103,10 +110,45 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         }
         println!();
     }
+    if !segments.is_empty() {
+        print_segments(&segments);
+    }
     let summary_path = out.join("summary.csv");
     write_summary_csv(&summaries, &summary_path)?;
     println!("wrote {} and per-controller folders in {}", summary_path.display(), out.display());
     Ok(())
+}
+
+/// The reference whose segments (cruise, climb, glide, dive) `flapper eval` measures one by one.
+const LONGITUDINAL: &str = "longitudinal";
+
+/// Per segment of the longitudinal reference and per controller, the figures over the flights from
+/// randomized starts (each controller's `segments.csv`).
+fn print_segments(segments: &[(&str, Vec<SegmentOverFlights>)]) {
+    println!(
+        "per segment of the longitudinal reference (mean over the flights that flew it to its end; the launch's first {SETTLE_S:.0} s left out):"
+    );
+    println!(
+        "{:<10} {:<8} {:>9} {:>10} {:>14} {:>10} {:>15}",
+        "", "segment", "time (s)", "flights", "|power| (W)", "error (m)", "energy (J/m)"
+    );
+    for (name, rows) in segments {
+        for row in rows {
+            println!(
+                "{:<10} {:<8} {:>4.0}-{:<4.0} {:>5}/{:<4} {:>14.1} {:>10.2} {:>15.2}   glide fraction {:.2}",
+                name,
+                row.segment,
+                row.start_s,
+                row.end_s,
+                row.flights,
+                row.episodes,
+                row.mean_absolute_power_w,
+                row.mean_error_m,
+                row.energy_per_metre_j,
+                row.glide_fraction
+            );
+        }
+    }
 }
 
 /// `flapper eval`'s options.

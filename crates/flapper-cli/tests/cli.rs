@@ -265,6 +265,7 @@ fn train_writes_a_run_resumes_it_and_eval_flies_its_policy() {
     ] {
         assert!(eval_out.join(file).metadata().unwrap().len() > 100, "{file} missing or empty");
     }
+    assert!(!eval_out.join("policy/segments.csv").exists(), "segments belong to the longitudinal reference");
     // summary.csv is the printed table: a row per metric (labels with commas stay one field), a column per controller.
     let mut summary = csv::Reader::from_path(eval_out.join("summary.csv")).unwrap();
     assert_eq!(summary.headers().unwrap().iter().collect::<Vec<_>>(), ["metric", "policy", "scripted"]);
@@ -526,6 +527,57 @@ fn a_folder_holding_files_flapper_did_not_write_is_refused_as_output() {
         assert!(flapper(&["reference", "loop", "--out", ours.to_str().unwrap()]).status.success());
     }
     assert!(ours.join(".flapper-output").exists() && ours.join("reference.csv").exists());
+}
+
+#[test]
+fn eval_on_the_longitudinal_reference_measures_each_segment_over_its_flights() {
+    // The hand fine-tune that glides (`policies/experiments/smooth`): from randomized starts its wings are
+    // held over most of the glide segment and never in the cruise, where the stroke costs more power.
+    let out = scratch("segments");
+    let policy = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../policies/experiments/smooth/policy.safetensors");
+    let output = flapper(&[
+        "eval",
+        "--policy",
+        policy.to_str().unwrap(),
+        "--reference",
+        "longitudinal",
+        "--episodes",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("per segment of the longitudinal reference"), "{stdout}");
+    let read = |pilot: &str| -> Vec<csv::StringRecord> {
+        let mut reader = csv::Reader::from_path(out.join(pilot).join("segments.csv")).unwrap();
+        assert_eq!(
+            reader.headers().unwrap().iter().collect::<Vec<_>>(),
+            [
+                "segment",
+                "start_s",
+                "end_s",
+                "flights",
+                "episodes",
+                "mean_absolute_power_w",
+                "mean_error_m",
+                "energy_per_metre_j",
+                "glide_fraction"
+            ]
+        );
+        reader.records().map(|r| r.unwrap()).collect()
+    };
+    let number = |row: &csv::StringRecord, k: usize| -> f64 { row[k].parse().unwrap() };
+    let policy_rows = read("policy");
+    let segments: Vec<&str> = policy_rows.iter().map(|r| &r[0]).collect();
+    assert_eq!(segments, ["cruise", "climb", "glide", "dive"]);
+    assert!(policy_rows.iter().all(|r| &r[3] == "3" && &r[4] == "3"), "every flight flies every segment");
+    let (cruise, glide) = (&policy_rows[0], &policy_rows[2]);
+    assert!(number(glide, 8) >= 0.5 && number(cruise, 8) < 0.1, "{glide:?} {cruise:?}");
+    assert!(number(glide, 5) < 0.5 * number(cruise, 5), "{glide:?} {cruise:?}");
+    // The scripted gait falls behind in the climb: no flight of it reaches the climb's end.
+    let scripted = read("scripted");
+    assert_eq!(&scripted[1][3], "0", "{:?}", scripted[1]);
 }
 
 #[test]
