@@ -14,6 +14,7 @@ use flapper_eval::tracking_report::{
 };
 use flapper_sim::RobotModel;
 use flapper_task::TaskConfig;
+use flapper_task::reference::NAMED_START_M;
 
 use crate::flag_values::{count, seed};
 
@@ -54,6 +55,10 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     // Every controller's task steps at the same rate: the control substeps are the paper's for both.
     let dt_s = controllers[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
+    // The named reference itself, not a file that happens to share its name.
+    let longitudinal =
+        flapper_task::reference::named::named(LONGITUDINAL, NAMED_START_M, dt_s, lookahead as f64 * dt_s);
+    let per_segment = longitudinal.as_ref() == Some(reference.as_ref());
     if let Some(warning) = flapper_eval::tracking::speed_warning(&reference) {
         eprintln!("warning: {warning}");
     }
@@ -75,10 +80,10 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory '{}'", dir.display()))?;
         write_steps_csv(&results, &dir.join("steps.csv"))?;
-        if reference.name() == LONGITUDINAL {
-            let per_segment = segments_over_flights(&results, period);
-            write_segments_csv(&dir.join("segments.csv"), &per_segment)?;
-            segments.push((*name, per_segment));
+        if per_segment {
+            let figures = segments_over_flights(&results, period);
+            write_segments_csv(&dir.join("segments.csv"), &figures)?;
+            segments.push((*name, figures));
         }
         if observations {
             let (_, record) =

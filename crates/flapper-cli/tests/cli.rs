@@ -578,6 +578,20 @@ fn eval_on_the_longitudinal_reference_measures_each_segment_over_its_flights() {
     // The scripted gait falls behind in the climb: no flight of it reaches the climb's end.
     let scripted = read("scripted");
     assert_eq!(&scripted[1][3], "0", "{:?}", scripted[1]);
+
+    // A file of one's own that happens to be called `longitudinal` is flown, but has no such segments.
+    let own = scratch("segments-own");
+    let rows: String = (0..=50).map(|k| format!("{:.1},{:.1},0,10\n", 0.1 * k as f64, 0.4 * k as f64)).collect();
+    std::fs::write(own.join("longitudinal"), format!("time_s,x_m,y_m,z_m\n{rows}")).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_flapper"))
+        .args(["eval", "--policy", policy.to_str().unwrap(), "--reference", "longitudinal", "--episodes", "1"])
+        .args(["--no-baseline", "--out", "eval"])
+        .current_dir(&own)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(own.join("eval/policy/steps.csv").exists());
+    assert!(!own.join("eval/policy/segments.csv").exists(), "{}", String::from_utf8_lossy(&output.stdout));
 }
 
 #[test]
