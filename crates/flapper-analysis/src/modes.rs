@@ -20,6 +20,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::AnalysisError;
 
+/// The named reference whose segments these are (`flapper reference --list`).
+pub const LONGITUDINAL: &str = "longitudinal";
 /// The longitudinal reference's segments: name, start and end (s).
 pub const SEGMENTS: [(&str, f64, f64); 4] =
     [("cruise", 0.0, 6.0), ("climb", 6.0, 12.0), ("glide", 12.0, 18.0), ("dive", 18.0, 24.0)];
@@ -96,7 +98,7 @@ pub fn longitudinal_from_exact_start(
     controller: &TrackingController,
     task: &TaskConfig,
 ) -> Result<EpisodeResult, AnalysisError> {
-    named_from_exact_start(robot, controller, task, "longitudinal")
+    named_from_exact_start(robot, controller, task, LONGITUDINAL)
 }
 
 /// Flies the named reference `name` (`flapper reference --list`) once from its exact start with
@@ -143,12 +145,13 @@ pub fn measure_controller_flight_modes(
         });
     }
     let dt_s = task.control_period_s(robot.timestep_s());
-    let flap = ActuatedJoint::FlapLeft.index();
-    let flap_angles: Vec<f64> = flight.steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
-    let held = held_wings(&flap_angles, dt_s);
+    let held = held_along(&flight.steps, dt_s);
     let segments: Vec<SegmentFigures> = SEGMENTS
         .iter()
-        .map(|&(segment, start_s, end_s)| segment_figures(&flight.steps, &held, dt_s, segment, start_s, end_s))
+        .map(|&(segment, start_s, end_s)| {
+            let inside = segment_indices(&flight.steps, start_s, end_s);
+            segment_figures(&flight.steps, &inside, &held, dt_s, segment, start_s, end_s)
+        })
         .collect();
     let gliding: Vec<&str> = segments.iter().filter(|s| s.glides).map(|s| s.segment.as_str()).collect();
     let verdict = if gliding.is_empty() {
@@ -299,14 +302,8 @@ pub struct SegmentOverFlights {
 /// Each of [`SEGMENTS`] over `flights` (the longitudinal reference flown from many starts, a control
 /// step `dt_s` apart); NaN figures for a segment no flight flew to its end.
 pub fn segments_over_flights(flights: &[EpisodeResult], dt_s: f64) -> Vec<SegmentOverFlights> {
-    let flap = ActuatedJoint::FlapLeft.index();
-    let measured: Vec<(&EpisodeResult, Vec<bool>)> = flights
-        .iter()
-        .map(|flight| {
-            let angles: Vec<f64> = flight.steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
-            (flight, held_wings(&angles, dt_s))
-        })
-        .collect();
+    let measured: Vec<(&EpisodeResult, Vec<bool>)> =
+        flights.iter().map(|flight| (flight, held_along(&flight.steps, dt_s))).collect();
     SEGMENTS
         .iter()
         .map(|&(segment, start_s, end_s)| {
@@ -316,8 +313,8 @@ pub fn segments_over_flights(flights: &[EpisodeResult], dt_s: f64) -> Vec<Segmen
             let per_flight: Vec<(SegmentFigures, f64)> = through
                 .iter()
                 .map(|(flight, held)| {
-                    let figures = segment_figures(&flight.steps, held, dt_s, segment, start_s, end_s);
                     let inside = segment_indices(&flight.steps, start_s, end_s);
+                    let figures = segment_figures(&flight.steps, &inside, held, dt_s, segment, start_s, end_s);
                     let error =
                         inside.iter().map(|&k| flight.steps[k].error_m).sum::<f64>() / inside.len().max(1) as f64;
                     (figures, error)
@@ -351,16 +348,16 @@ pub fn write_segments_csv(path: &Path, rows: &[SegmentOverFlights]) -> Result<()
         .map_err(|e| AnalysisError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
-/// One segment's figures from the steps inside it (after the launch transient).
+/// One segment's figures from the steps inside it (`indices`, from [`segment_indices`]).
 fn segment_figures(
     steps: &[TrackingStep],
+    indices: &[usize],
     held: &[bool],
     dt_s: f64,
     segment: &'static str,
     start_s: f64,
     end_s: f64,
 ) -> SegmentFigures {
-    let indices = segment_indices(steps, start_s, end_s);
     let inside: Vec<&TrackingStep> = indices.iter().map(|&k| &steps[k]).collect();
     let flap = ActuatedJoint::FlapLeft.index();
     let angles: Vec<f64> = inside.iter().map(|s| s.joint_positions_rad[flap]).collect();
@@ -381,6 +378,13 @@ fn segment_figures(
         glide_fraction,
         glides: glide_fraction >= GLIDING_SEGMENT_FRACTION,
     }
+}
+
+/// [`held_wings`] of the left flap along a flight's steps.
+fn held_along(steps: &[TrackingStep], dt_s: f64) -> Vec<bool> {
+    let flap = ActuatedJoint::FlapLeft.index();
+    let angles: Vec<f64> = steps.iter().map(|s| s.joint_positions_rad[flap]).collect();
+    held_wings(&angles, dt_s)
 }
 
 /// Per sample of a flap angle sampled every `dt_s`: whether the wing is held (gliding), that is

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
-use flapper_analysis::modes::{SETTLE_S, SegmentOverFlights, segments_over_flights, write_segments_csv};
+use flapper_analysis::modes::{LONGITUDINAL, SETTLE_S, SegmentOverFlights, segments_over_flights, write_segments_csv};
 use flapper_eval::ScriptedGaitConfig;
 use flapper_eval::load_flight_policy;
 use flapper_eval::tracking::{TrackingController, evaluate_tracking};
@@ -56,9 +56,9 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     let dt_s = controllers[0].2.control_period_s(robot.timestep_s());
     let reference = Arc::new(flapper_task::reference::resolve(reference, dt_s, lookahead)?);
     // The named reference itself, not a file that happens to share its name.
-    let longitudinal =
-        flapper_task::reference::named::named(LONGITUDINAL, NAMED_START_M, dt_s, lookahead as f64 * dt_s);
-    let per_segment = longitudinal.as_ref() == Some(reference.as_ref());
+    let per_segment = reference.name() == LONGITUDINAL
+        && flapper_task::reference::named::named(LONGITUDINAL, NAMED_START_M, dt_s, lookahead as f64 * dt_s).as_ref()
+            == Some(reference.as_ref());
     if let Some(warning) = flapper_eval::tracking::speed_warning(&reference) {
         eprintln!("warning: {warning}");
     }
@@ -123,9 +123,6 @@ pub fn eval_command(robot: &RobotModel, args: EvalRequest) -> Result<()> {
     println!("wrote {} and per-controller folders in {}", summary_path.display(), out.display());
     Ok(())
 }
-
-/// The reference whose segments (cruise, climb, glide, dive) `flapper eval` measures one by one.
-const LONGITUDINAL: &str = "longitudinal";
 
 /// Per segment of the longitudinal reference and per controller, the figures over the flights from
 /// randomized starts (each controller's `segments.csv`).
