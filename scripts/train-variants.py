@@ -34,7 +34,7 @@ import re
 import subprocess
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 FLAPPER = os.environ.get("FLAPPER", "target/release/flapper")
@@ -113,6 +113,15 @@ def train(out, name, init_from, iterations, deadline):
             return "stopped at the time limit"
 
 
+def progress(log):
+    """The latest `it N/M` a `flapper train` log shows, or 'waiting'."""
+    try:
+        found = re.findall(r"\bit (\d+/\d+)", log.read_text())
+    except OSError:
+        return "waiting"
+    return f"it {found[-1]}" if found else "starting"
+
+
 def measure(folder, frontier):
     """Export a checkpoint's policy and fly sysid, modes and (if asked) frontier on it, one thread each."""
     policy = folder / "policy.safetensors"
@@ -176,7 +185,12 @@ def main():
     print(f"training {len(variants)} variants of {args.config} from {args.init_from}, {args.jobs} at once on "
           f"{args.threads} threads each, {args.iterations} iterations", flush=True)
     with ThreadPoolExecutor(args.jobs) as pool:
-        ends = dict(zip(texts, pool.map(lambda n: train(args.out, n, args.init_from, args.iterations, deadline), texts)))
+        futures = {n: pool.submit(train, args.out, n, args.init_from, args.iterations, deadline) for n in texts}
+        started = time.time()
+        while wait(futures.values(), timeout=60).not_done:
+            print(f"  {time.time() - started:.0f} s: " + ", ".join(f"{n} {progress(args.out / f'{n}.log')}" for n in texts),
+                  flush=True)
+        ends = {n: f.result() for n, f in futures.items()}
     for name, end in ends.items():
         if end == 0 or isinstance(end, str):
             print(f"  {name}: {'done' if end == 0 else end}")
@@ -197,7 +211,10 @@ def main():
             tasks.append((name, iteration, folder, k >= len(checkpoints) - args.frontier_last))
     print(f"measuring {len(tasks)} checkpoints, {args.jobs * args.threads} at once", flush=True)
     with ThreadPoolExecutor(args.jobs * args.threads) as pool:
-        measured = list(pool.map(lambda t: measure(t[2], t[3]), tasks))
+        futures = [pool.submit(measure, t[2], t[3]) for t in tasks]
+        while pending := wait(futures, timeout=60).not_done:
+            print(f"  measured {len(futures) - len(pending)} of {len(futures)}", flush=True)
+        measured = [f.result() for f in futures]
     rows = [{"variant": t[0], "iteration": t[1], **m} for t, m in zip(tasks, measured)]
     with open(args.out / "variants.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, COLUMNS)
