@@ -114,7 +114,7 @@ def train(out, name, init_from, iterations, deadline):
 
 
 def progress(log):
-    """The latest `it N/M` a `flapper train` log shows, or 'waiting'."""
+    """The latest `it N/M` a `flapper train` log shows; 'starting' before its first, 'waiting' before the log."""
     try:
         found = re.findall(r"\bit (\d+/\d+)", log.read_text())
     except OSError:
@@ -123,7 +123,8 @@ def progress(log):
 
 
 def measure(folder, frontier):
-    """Export a checkpoint's policy and fly sysid, modes and (if asked) frontier on it, one thread each."""
+    """Fly sysid, modes and (if asked) frontier on an exported policy, one thread each. A measurement that
+    fails leaves its cells empty; its log is in the policy's folder (sysid.log, modes.log, frontier.log)."""
     policy = folder / "policy.safetensors"
     row = {}
     if run([FLAPPER, "sysid", "--policy", str(policy), "--out", str(folder / "sysid")], folder / "sysid.log", 1) == 0:
