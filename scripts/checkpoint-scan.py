@@ -18,13 +18,14 @@ can be flown directly (no export needed).
 
 import argparse
 import csv
-import json
 import os
 import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+
+from flapper_outputs import identified_fits, modes_segments, one_thread_env
 
 HELD_OUT_SEED, HELD_OUT_EPISODES = 1000, 200
 BAR_SEED, BAR_EPISODES = 1, 100
@@ -47,9 +48,8 @@ def stroke_row(name, folder):
         reason = modes.with_suffix(".txt").read_text().strip().splitlines()[-1]
         return {"policy": name, "flown": reason,
                 **{f"{tag}_{figure}": "" for tag in SEGMENTS for figure in STROKE_FIGURES}}
-    segments = json.loads((modes / "modes.json").read_text())["segments"]
     row = {"policy": name, "flown": "yes"}
-    for s in segments:
+    for s in modes_segments(modes).values():
         for figure in STROKE_FIGURES:
             row[f"{s['segment']}_{figure}"] = round(s[figure], 1 if figure == "flap_amplitude_deg" else 2)
     return row
@@ -81,7 +81,7 @@ def run(job):
     folder.parent.mkdir(parents=True, exist_ok=True)
     log = folder.with_suffix(".txt")
     with open(log, "w") as f:
-        done = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, env={**os.environ, "RAYON_NUM_THREADS": "1"})
+        done = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, env=one_thread_env())
     if done.returncode != 0 and not may_fail:
         sys.exit(f"checkpoint-scan: '{' '.join(args)}' failed (exit {done.returncode}); its output: {log}")
 
@@ -137,14 +137,14 @@ def main():
         if a.stroke:
             rows.append(stroke_row(name, d))
             continue
-        fits = json.loads((d / "sysid" / "sysid.json").read_text())
+        fits = identified_fits(d / "sysid")
         rows.append({
             "policy": name,
             "lon_fluid_held_out_percent": all_five_percent(d / "lon-fluid-held-out"),
             "lon_fluid_bar_percent": all_five_percent(d / "lon-fluid-bar"),
             "lat_table3_held_out_percent": table3_percent(d / "lat-table3-held-out"),
             "lat_table3_bar_percent": table3_percent(d / "lat-table3-bar"),
-            **{f"sysid_fit_{axis}_percent": round(fits[axis]["fit_percent"], 1) for axis in "xyz"},
+            **{f"sysid_fit_{axis}_percent": round(fit, 1) for axis, fit in fits.items()},
         })
     with open(a.out / "scan.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -31,6 +31,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from flapper_outputs import frontier_point, identified_fits
+
 REFERENCES = ["cruise", "longitudinal", "lateral", "sharp-turn", "loop", "immelmann", "roll-off-the-bottom", "aerobatic"]
 # The one-command curriculum issue's nominal bars: (completed of 100 at least, mean RMS error at most, m).
 NOMINAL_BARS = {
@@ -111,8 +113,7 @@ def robustness(flapper, policy, scratch):
 def sysid(flapper, policy, scratch):
     out = scratch / "sysid"
     flapper(["sysid", "--policy", str(policy)], out)
-    result = json.load(open(out / "sysid.json"))
-    row = {f"sysid_fit_{axis}_percent": round(result[axis]["fit_percent"], 1) for axis in "xyz"}
+    row = {f"sysid_fit_{axis}_percent": round(fit, 1) for axis, fit in identified_fits(out).items()}
     row["sysid_bar_met"] = all(row[f"sysid_fit_{axis}_percent"] >= SYSID_BAR_PERCENT for axis in "xyz")
     return row
 
@@ -125,7 +126,7 @@ FRONTIER_COLUMNS = ["energy_ratio", "glide_fraction", "cruise_flap_hz", "level3_
 def frontier(flapper, policy, scratch):
     out = scratch / "frontier"
     flapper(["frontier", "--policy", str(policy), "--episodes", "100", "--seed", "11"], out)
-    measured = next(csv.DictReader(open(out / "frontier.csv")))
+    measured = frontier_point(out)
     row = {key: (float(measured[key]) if measured[key] not in ("", "NaN") else None) for key in FRONTIER_COLUMNS}
     row["level3_completed"] = None if row["level3_completed"] is None else int(row["level3_completed"])
     for key in ["energy_ratio", "glide_fraction", "cruise_flap_hz", "level3_rms_m"]:

@@ -28,7 +28,6 @@ else target/release/flapper.
 
 import argparse
 import csv
-import json
 import os
 import re
 import subprocess
@@ -36,6 +35,9 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # flapper_outputs, also when loaded by file path (tests)
+from flapper_outputs import frontier_point, identified_fits, modes_segments  # noqa: E402
 
 FLAPPER = os.environ.get("FLAPPER", "target/release/flapper")
 NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
@@ -128,18 +130,16 @@ def measure(folder, frontier):
     policy = folder / "policy.safetensors"
     row = {}
     if run([FLAPPER, "sysid", "--policy", str(policy), "--out", str(folder / "sysid")], folder / "sysid.log", 1) == 0:
-        fits = json.loads((folder / "sysid" / "sysid.json").read_text())
-        row.update({f"fit_{a}": f"{fits[a]['fit_percent']:.1f}" for a in "xyz"})
+        row.update({f"fit_{axis}": f"{fit:.1f}" for axis, fit in identified_fits(folder / "sysid").items()})
     if run([FLAPPER, "modes", "--policy", str(policy), "--out", str(folder / "modes")], folder / "modes.log", 1) == 0:
-        segments = {s["segment"]: s for s in json.loads((folder / "modes" / "modes.json").read_text())["segments"]}
+        segments = modes_segments(folder / "modes")
         row["glide_exact_start"] = f"{segments['glide']['glide_fraction']:.2f}"
         row["cruise_flap_hz_exact_start"] = f"{segments['cruise']['flap_fundamental_hz']:.2f}"
     if frontier:
         args = [FLAPPER, "frontier", "--policy", str(policy), "--label", folder.name, "--episodes", "100",
                 "--seed", "11", "--out", str(folder / "frontier")]
         if run(args, folder / "frontier.log", 1) == 0:
-            with open(folder / "frontier" / "frontier.csv") as f:
-                first = next(csv.DictReader(f))
+            first = frontier_point(folder / "frontier")
             for key in ["longitudinal_completed", "longitudinal_rms_m", "energy_ratio", "glide_fraction",
                         "cruise_flap_hz", "level3_completed", "level3_rms_m"]:
                 row[key] = first[key]
