@@ -544,15 +544,21 @@ impl Round<'_> {
             Ok(())
         }));
         let gate = self.stage.gate.clone();
-        trainer.run(&mut |log, _| {
-            progress(Progress::Iteration { stage: number, log });
+        // Validations judged since the last report: after each iteration, and once more at the end for the
+        // stage's last checkpoint, which is judged after its iteration has been reported.
+        let report = |progress: &mut dyn FnMut(Progress)| {
             let mut state = shared.lock().expect("no panic while holding the selection");
             let fresh: Vec<Validated> = state.1.drain(..).collect();
             for row in &fresh {
                 progress(Progress::Validated { stage: number, row, gate_met: state.0.gate_met(&gate) });
             }
-            !state.0.gate_met(&gate)
+            state.0.gate_met(&gate)
+        };
+        trainer.run(&mut |log, _| {
+            progress(Progress::Iteration { stage: number, log });
+            !report(&mut *progress)
         })?;
+        report(progress);
         let state = shared.lock().expect("no panic while holding the selection");
         Ok(state.0.clone())
     }

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use flapper_curriculum::run::stage_dir;
+use flapper_curriculum::run::{Progress, stage_dir};
 use flapper_curriculum::{CurriculumConfig, CurriculumRequest, run_curriculum};
 use flapper_sim::RobotModel;
 
@@ -172,6 +172,33 @@ fn trains_every_stage_selects_and_summarizes_and_resumes_exactly() {
     for dir in [whole, between, inside, early, foreign] {
         std::fs::remove_dir_all(dir).unwrap();
     }
+}
+
+/// Every validation written to a stage's selection.csv is reported to the progress callback (the log's
+/// "validation at iteration N" lines), the one of the stage's last checkpoint included, which is judged after
+/// the stage's last iteration has been reported.
+#[test]
+fn every_validation_written_is_reported_the_last_checkpoints_included() {
+    let dir = scratch("reported");
+    let robot = RobotModel::flapper().unwrap();
+    let config = CurriculumConfig::from_toml(TINY, "tiny.toml").unwrap();
+    let request = CurriculumRequest { dir: &dir, config, until_stage: None, command: "test".into(), init_from: None };
+    let mut reported = [Vec::new(), Vec::new()];
+    run_curriculum(&robot, request, &mut |progress| {
+        if let Progress::Validated { stage, row, .. } = progress {
+            reported[stage - 1].push(row.iteration);
+        }
+    })
+    .unwrap();
+    for stage in [1, 2] {
+        let written: Vec<usize> = csv::Reader::from_path(stage_dir(&dir, stage).join("selection.csv"))
+            .unwrap()
+            .deserialize::<std::collections::HashMap<String, String>>()
+            .map(|row| row.unwrap()["iteration"].parse().unwrap())
+            .collect();
+        assert_eq!(reported[stage - 1], written, "stage {stage}");
+    }
+    assert_eq!(reported[1], [1, 2, 3, 4], "stage 2 validates every iteration, its last (4) too");
 }
 
 #[test]
