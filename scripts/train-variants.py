@@ -36,8 +36,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # flapper_outputs, also when loaded by file path (tests)
-from flapper_outputs import frontier_point, identified_fits, modes_segments  # noqa: E402
+from flapper_outputs import frontier_point, identified_fits, modes_segments
 
 FLAPPER = os.environ.get("FLAPPER", "target/release/flapper")
 NAME = re.compile(r"^[A-Za-z0-9_.-]+$")

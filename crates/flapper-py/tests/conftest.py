@@ -2,10 +2,13 @@
 
 import pathlib
 import subprocess
+import sys
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
+# The scripts' shared module (scripts/flapper_outputs.py), importable as it is when a script runs from there.
+sys.path.insert(0, str(ROOT / "scripts"))
 
 
 def cargo_run(package, target_args, args):

@@ -5,16 +5,12 @@ name the longitudinal reference's four segments."""
 
 import csv
 import importlib.util
-import os
 import subprocess
-import sys
 
+import flapper_outputs
 import pytest
 
 from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "scripts"))
-import flapper_outputs  # noqa: E402
 
 spec = importlib.util.spec_from_file_location("seed_table", ROOT / "scripts" / "seed-table.py")
 seed_table = importlib.util.module_from_spec(spec)
@@ -25,9 +21,8 @@ FINAL = ROOT / "policies" / "final" / "policy.safetensors"
 
 @pytest.fixture(scope="module")
 def flapper():
-    """seed-table's runner on the release binary (built here if it is not yet)."""
+    """seed-table's runner ($FLAPPER, else the release binary, built here if it is not yet)."""
     subprocess.run(["cargo", "build", "--release", "--quiet", "-p", "flapper-cli"], cwd=ROOT, check=True)
-    os.environ.setdefault("FLAPPER", str(ROOT / "target" / "release" / "flapper"))
     return seed_table.Flapper(None)
 
 
