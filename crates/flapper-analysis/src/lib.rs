@@ -12,13 +12,16 @@
 //! - [`robustness`]: success rates under randomized fluid coefficients, constant winds and all of
 //!   Table III, and the level-flight airspeed envelope (paper Fig. 8-9);
 //! - [`frontier`]: energy against tracking per controller (the efficient-bird trade-off), with the
-//!   glide fraction, the cruise flap frequency and slow level flight.
+//!   glide fraction, the cruise flap frequency and slow level flight;
+//! - [`power_curve`]: what straight and level flight costs at each airspeed: the scripted gait's
+//!   family, the cheapest gait per airspeed, and policies on level paths beside it.
 
 pub mod fit;
 pub mod frontier;
 pub mod linear_system;
 pub mod modes;
 pub mod phase;
+pub mod power_curve;
 pub mod robustness;
 pub mod sysid;
 

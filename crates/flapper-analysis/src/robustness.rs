@@ -331,8 +331,8 @@ impl RobustnessSettings {
     }
 }
 
-/// A straight and level reference at `speed_mps` from 10 m up, heading +x.
-fn level_reference(speed_mps: f64, dt_s: f64, lookahead_s: f64) -> Reference {
+/// A straight and level reference at `speed_mps` for `duration_s` from 10 m up, heading +x.
+pub fn level_reference(speed_mps: f64, duration_s: f64, dt_s: f64, lookahead_s: f64) -> Reference {
     let piece = |duration_s| Piece::Command {
         forward_speed_mps: speed_mps,
         vertical_speed_mps: 0.0,
@@ -340,7 +340,7 @@ fn level_reference(speed_mps: f64, dt_s: f64, lookahead_s: f64) -> Reference {
         duration_s,
     };
     // As the named references: the lookahead's worth of the same flight after the end.
-    let pieces = [piece(ENVELOPE_DURATION_S), piece(lookahead_s)];
+    let pieces = [piece(duration_s), piece(lookahead_s)];
     build(&format!("level at {speed_mps} m/s"), &pieces, Vec3::new(0.0, 0.0, 10.0), 0.0, dt_s)
 }
 
@@ -420,7 +420,7 @@ pub fn robustness(
                 let lookahead_s = task.observation.lookahead_steps as f64 * reference.dt_s();
                 let mut speeds = Vec::new();
                 for speed in ENVELOPE_SPEEDS_MPS {
-                    let level = Arc::new(level_reference(speed, reference.dt_s(), lookahead_s));
+                    let level = Arc::new(level_reference(speed, ENVELOPE_DURATION_S, reference.dt_s(), lookahead_s));
                     let tally = Tally::of(&evaluate_tracking(
                         robot,
                         controller,

@@ -40,7 +40,7 @@ pub struct FrontierArgs {
 
 /// A policy's name when no --label gives one: its folder's for a run's `policy.safetensors`, else
 /// the file's name without its extension (a checkpoint).
-fn default_label(path: &Path) -> String {
+pub fn default_label(path: &Path) -> String {
     let folder =
         path.parent().and_then(Path::file_name).filter(|_| path.file_name() == Some("policy.safetensors".as_ref()));
     folder.or_else(|| path.file_stem()).map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())

@@ -18,6 +18,7 @@ mod modes;
 mod output_dir;
 mod pendulum;
 mod phase;
+mod power_curve;
 mod progress;
 mod reference;
 mod render;
@@ -75,6 +76,10 @@ enum Command {
     /// glide fraction, the cruise flap frequency and the level 3.0 m/s path; a table, frontier.csv and
     /// energy_vs_tracking.svg.
     Frontier(frontier::FrontierArgs),
+    /// What straight and level flight costs at each airspeed: the scripted gait's family (frequency,
+    /// trim, wing pitch, tail) flown level, the cheapest gait per airspeed, and policies on level paths
+    /// beside it (energy per metre over the cheapest gait's); gaits.csv, power_curve.csv, power_curve.svg.
+    PowerCurve(power_curve::PowerCurveArgs),
     /// Robustness sweeps (paper Fig. 8-9) on one reference: success as each fluid coefficient (and all
     /// five) is randomized over wider ranges, under constant winds, with all of Table III at once, and
     /// the level-flight airspeed envelope; robustness_fluid.csv, robustness_wind.csv, robustness.json,
@@ -157,6 +162,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Phase(args) => phase::run(args, model),
         Command::Modes(args) => modes::run(args, model),
         Command::Frontier(args) => frontier::run(args, model),
+        Command::PowerCurve(args) => power_curve::run(args, model),
         Command::Robustness(args) => robustness::run(args, model),
         Command::Report(args) => report::run(args, model),
         Command::Render(args) => render::run(args, model),

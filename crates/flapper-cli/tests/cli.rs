@@ -862,3 +862,69 @@ fn frontier_refuses_bad_input_with_one_line_naming_the_flag_or_file() {
     assert_usage_error(&flapper(&["frontier", "--out", o]), "--policy <FILE>");
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1, "a refused command writes nothing");
 }
+
+#[test]
+fn power_curve_flies_the_family_asked_for_and_judges_a_policy_against_its_cheapest_gait() {
+    let out = scratch("power-curve");
+    let policy = shipped_policy("final");
+    let family = ["--frequencies", "5.3", "--body-pitches", "10,20", "--pitch-amplitudes", "10", "--tail-trims", "-20"];
+    let mut args = vec!["power-curve", "--policy", &policy, "--speeds", "3.5", "--episodes", "2", "--out"];
+    args.push(out.to_str().unwrap());
+    args.extend(family);
+    let output = flapper(&args);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("of 2 gaits, 2 level"), "{stdout}");
+    assert!(stdout.contains("the scripted gait (5.3 Hz, nose 20 deg) flies level at"), "{stdout}");
+    for file in ["gaits.csv", "power_curve.csv", "policies_level.csv", "power_curve.svg"] {
+        assert!(out.join(file).is_file(), "{file} written");
+    }
+    let read = |file: &str| {
+        let mut reader = csv::Reader::from_path(out.join(file)).unwrap();
+        let header = reader.headers().unwrap().clone();
+        let rows: Vec<csv::StringRecord> = reader.records().map(Result::unwrap).collect();
+        (header, rows)
+    };
+    let column = |header: &csv::StringRecord, row: &csv::StringRecord, name: &str| -> f64 {
+        row[header.iter().position(|h| h == name).unwrap()].parse().unwrap()
+    };
+    let (gait_header, gaits) = read("gaits.csv");
+    assert_eq!(gaits.len(), 2);
+    let scripted = gaits.iter().find(|g| &g[gait_header.iter().position(|h| h == "scripted_gait").unwrap()] == "true");
+    let scripted_j_per_m =
+        column(&gait_header, scripted.expect("the scripted gait is in the family"), "energy_per_metre_j");
+    // The nose held lower flies faster (the trim sets the speed).
+    let speeds: Vec<f64> = gaits.iter().map(|g| column(&gait_header, g, "speed_mps")).collect();
+    assert!(speeds[0] > speeds[1], "nose 10 deg flies faster than 20: {speeds:?}");
+    let (header, policies) = read("policies_level.csv");
+    assert_eq!(policies.len(), 1);
+    let row = &policies[0];
+    assert_eq!(column(&header, row, "completed"), 2.0);
+    let j_per_m = column(&header, row, "energy_per_metre_j");
+    let over_scripted = column(&header, row, "over_scripted_gait");
+    assert!(
+        (over_scripted - j_per_m / scripted_j_per_m).abs() < 1e-9,
+        "{over_scripted} against {j_per_m} / {scripted_j_per_m}"
+    );
+}
+
+#[test]
+fn power_curve_refuses_bad_input_with_one_line_naming_the_flag_or_file() {
+    let out = scratch("power-curve-bad");
+    let o = out.to_str().unwrap();
+    let missing = "/no/such/policy.safetensors";
+    assert_one_line_error(&flapper(&["power-curve", "--policy", missing, "--out", o]), missing);
+    assert_one_line_error(&flapper(&["power-curve", "--speeds", "3,0.5", "--out", o]), "--speeds");
+    assert_one_line_error(&flapper(&["power-curve", "--frequencies", "0", "--out", o]), "--frequencies");
+    assert_one_line_error(&flapper(&["power-curve", "--body-pitches", "nan", "--out", o]), "--body-pitches");
+    assert_one_line_error(&flapper(&["power-curve", "--episodes", "0", "--out", o]), "--episodes");
+    assert_one_line_error(
+        &flapper(&["power-curve", "--label", "a", "--out", o]),
+        "--label given 1 times for 0 --policy",
+    );
+    let not_a_number = flapper(&["power-curve", "--tail-trims", "up", "--out", o]);
+    let stderr = String::from_utf8_lossy(&not_a_number.stderr);
+    assert_eq!(not_a_number.status.code(), Some(2), "{stderr}");
+    assert!(stderr.starts_with("error: invalid value 'up' for '--tail-trims"), "{stderr}");
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "a refused command writes nothing");
+}
