@@ -31,24 +31,23 @@ pub struct PowerCurveArgs {
     #[arg(long = "label", value_name = "NAME")]
     pub labels: Vec<String>,
     /// Speeds of the policies' level paths (m/s, comma-separated).
-    #[arg(
-        long = "speeds",
-        value_delimiter = ',',
-        default_value = "3,3.5,4,4.5,5,5.3,6,7",
-        allow_negative_numbers = true
-    )]
+    #[arg(long = "speeds", value_delimiter = ',', default_value = "3,3.5,4,4.5,5,5.3,6,7", allow_hyphen_values = true)]
     pub speeds_mps: Vec<f64>,
     /// Flap frequencies of the gait family (Hz, comma-separated; default 4, 4.5, 5, 5.3, 5.6, 6).
-    #[arg(long = "frequencies", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long = "frequencies", value_delimiter = ',', allow_hyphen_values = true)]
     pub frequencies_hz: Option<Vec<f64>>,
-    /// Body-pitch trims the gaits' tail holds (deg nose up, comma-separated; default -5 to 40 by 5).
-    #[arg(long = "body-pitches", value_delimiter = ',', allow_negative_numbers = true)]
+    /// Body-pitch trims the gaits' tail holds (deg nose up, comma-separated; default -5 to 25 by 5).
+    #[arg(long = "body-pitches", value_delimiter = ',', allow_hyphen_values = true)]
     pub body_pitches_deg: Option<Vec<f64>>,
     /// Wing-pitch amplitudes (deg, comma-separated; default 5 to 35 by 5).
-    #[arg(long = "pitch-amplitudes", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long = "pitch-amplitudes", value_delimiter = ',', allow_hyphen_values = true)]
     pub pitch_amplitudes_deg: Option<Vec<f64>>,
+    /// How far the wing pitch leads the flap (deg, comma-separated; default 0, 45, 90, the scripted
+    /// gait's).
+    #[arg(long = "pitch-leads", value_delimiter = ',', allow_hyphen_values = true)]
+    pub pitch_leads_deg: Option<Vec<f64>>,
     /// Tail trims (deg, comma-separated; default -30 to 10 by 10).
-    #[arg(long = "tail-trims", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long = "tail-trims", value_delimiter = ',', allow_hyphen_values = true)]
     pub tail_trims_deg: Option<Vec<f64>>,
     /// Episodes per policy and speed, each from its own randomized start (as `flapper eval`).
     #[arg(long, default_value_t = 20, value_parser = count, allow_negative_numbers = true)]
@@ -143,14 +142,16 @@ fn gait_family(args: &PowerCurveArgs) -> Result<GaitFamily> {
             (0.0, 60.0),
             "deg",
         )?,
+        pitch_leads_deg: list(&args.pitch_leads_deg, default.pitch_leads_deg, "--pitch-leads", (-180.0, 180.0), "deg")?,
         tail_trims_deg: list(&args.tail_trims_deg, default.tail_trims_deg, "--tail-trims", (-60.0, 60.0), "deg")?,
     };
     let gaits = family.frequencies_hz.len()
         * family.body_pitches_deg.len()
         * family.pitch_amplitudes_deg.len()
+        * family.pitch_leads_deg.len()
         * family.tail_trims_deg.len();
     if gaits > MOST_GAITS {
-        bail!("the gait family has {gaits} gaits (the product of the four lists); at most {MOST_GAITS}");
+        bail!("the gait family has {gaits} gaits (the product of the five lists); at most {MOST_GAITS}");
     }
     Ok(family)
 }
@@ -163,13 +164,13 @@ fn print_tables(curve: &PowerCurve) {
         curve.gaits.iter().filter(|g| g.level()).count()
     );
     println!(
-        "{:>9} {:>6} {:>9} {:>8} {:>6} {:>7} {:>8} {:>8}",
-        "speed", "gaits", "power W", "J/m", "Hz", "pitch", "wing", "tail"
+        "{:>9} {:>6} {:>9} {:>8} {:>6} {:>7} {:>8} {:>8} {:>8}",
+        "speed", "gaits", "power W", "J/m", "Hz", "pitch", "wing", "lead", "tail"
     );
     for c in &curve.cheapest {
         let f = &c.flight;
         println!(
-            "{:>9.2} {:>6} {:>9.2} {:>8.3} {:>6.1} {:>7.0} {:>8.0} {:>8.0}",
+            "{:>9.2} {:>6} {:>9.2} {:>8.3} {:>6.1} {:>7.0} {:>8.0} {:>8.0} {:>8.0}",
             f.speed_mps,
             c.level_gaits,
             f.power_w,
@@ -177,6 +178,7 @@ fn print_tables(curve: &PowerCurve) {
             f.gait.frequency_hz,
             f.gait.body_pitch_deg,
             f.gait.pitch_amplitude_deg,
+            f.gait.pitch_lead_deg,
             f.gait.tail_trim_deg
         );
     }

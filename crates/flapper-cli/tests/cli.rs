@@ -867,14 +867,25 @@ fn frontier_refuses_bad_input_with_one_line_naming_the_flag_or_file() {
 fn power_curve_flies_the_family_asked_for_and_judges_a_policy_against_its_cheapest_gait() {
     let out = scratch("power-curve");
     let policy = shipped_policy("final");
-    let family = ["--frequencies", "5.3", "--body-pitches", "10,20", "--pitch-amplitudes", "10", "--tail-trims", "-20"];
+    let family = [
+        "--frequencies",
+        "5.3",
+        "--body-pitches",
+        "10,20",
+        "--pitch-amplitudes",
+        "10",
+        "--pitch-leads",
+        "90",
+        "--tail-trims",
+        "-20,-10",
+    ];
     let mut args = vec!["power-curve", "--policy", &policy, "--speeds", "3.5", "--episodes", "2", "--out"];
     args.push(out.to_str().unwrap());
     args.extend(family);
     let output = flapper(&args);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
-    assert!(stdout.contains("of 2 gaits, 2 level"), "{stdout}");
+    assert!(stdout.contains("of 4 gaits, 4 level"), "{stdout}");
     assert!(stdout.contains("the scripted gait (5.3 Hz, nose 20 deg) flies level at"), "{stdout}");
     for file in ["gaits.csv", "power_curve.csv", "policies_level.csv", "power_curve.svg"] {
         assert!(out.join(file).is_file(), "{file} written");
@@ -889,13 +900,13 @@ fn power_curve_flies_the_family_asked_for_and_judges_a_policy_against_its_cheape
         row[header.iter().position(|h| h == name).unwrap()].parse().unwrap()
     };
     let (gait_header, gaits) = read("gaits.csv");
-    assert_eq!(gaits.len(), 2);
+    assert_eq!(gaits.len(), 4, "two trims by two tails, a list of negative numbers taken as values");
     let scripted = gaits.iter().find(|g| &g[gait_header.iter().position(|h| h == "scripted_gait").unwrap()] == "true");
     let scripted_j_per_m =
         column(&gait_header, scripted.expect("the scripted gait is in the family"), "energy_per_metre_j");
     // The nose held lower flies faster (the trim sets the speed).
     let speeds: Vec<f64> = gaits.iter().map(|g| column(&gait_header, g, "speed_mps")).collect();
-    assert!(speeds[0] > speeds[1], "nose 10 deg flies faster than 20: {speeds:?}");
+    assert!(speeds[0] > speeds[2], "nose 10 deg flies faster than 20: {speeds:?}");
     let (header, policies) = read("policies_level.csv");
     assert_eq!(policies.len(), 1);
     let row = &policies[0];
@@ -917,6 +928,7 @@ fn power_curve_refuses_bad_input_with_one_line_naming_the_flag_or_file() {
     assert_one_line_error(&flapper(&["power-curve", "--speeds", "3,0.5", "--out", o]), "--speeds");
     assert_one_line_error(&flapper(&["power-curve", "--frequencies", "0", "--out", o]), "--frequencies");
     assert_one_line_error(&flapper(&["power-curve", "--body-pitches", "nan", "--out", o]), "--body-pitches");
+    assert_one_line_error(&flapper(&["power-curve", "--pitch-leads", "200", "--out", o]), "--pitch-leads");
     assert_one_line_error(&flapper(&["power-curve", "--episodes", "0", "--out", o]), "--episodes");
     assert_one_line_error(
         &flapper(&["power-curve", "--label", "a", "--out", o]),

@@ -38,9 +38,55 @@ pub fn fundamental(signal: &[f64], sample_rate_hz: f64) -> Option<Fundamental> {
     Some(Fundamental { frequency_hz: peak as f64 * sample_rate_hz / n as f64, energy_fraction: band / total })
 }
 
+/// How far `signal` leads `reference` (deg, in (-180, 180]) at `frequency_hz`: the phase of each one's
+/// Fourier component there (means removed), `signal`'s minus `reference`'s. A wing pitch ahead of its flap
+/// by a quarter period (the scripted gait's feathering) reads 90. `None` for signals of different
+/// lengths, fewer than 16 samples, or a component of either that is (numerically) absent.
+pub fn phase_lead_deg(reference: &[f64], signal: &[f64], frequency_hz: f64, sample_rate_hz: f64) -> Option<f64> {
+    if reference.len() != signal.len() || reference.len() < 16 {
+        return None;
+    }
+    let component = |values: &[f64]| {
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let omega = std::f64::consts::TAU * frequency_hz / sample_rate_hz;
+        values
+            .iter()
+            .enumerate()
+            .fold(Complex::new(0.0, 0.0), |sum, (k, v)| sum + Complex::from_polar(v - mean, -omega * k as f64))
+    };
+    let (r, s) = (component(reference), component(signal));
+    if r.norm() < 1e-9 || s.norm() < 1e-9 {
+        return None;
+    }
+    let lead = (s.arg() - r.arg()).to_degrees();
+    Some(if lead > 180.0 {
+        lead - 360.0
+    } else if lead <= -180.0 {
+        lead + 360.0
+    } else {
+        lead
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_phase_lead_of_a_shifted_sine_is_its_shift() {
+        let rate = 50.0;
+        let wave = |lead_deg: f64| -> Vec<f64> {
+            (0..500)
+                .map(|k| 0.2 + (std::f64::consts::TAU * 5.3 * k as f64 / rate + lead_deg.to_radians()).sin())
+                .collect()
+        };
+        for lead in [90.0, 45.0, 0.0, -75.0, 170.0] {
+            let read = phase_lead_deg(&wave(0.0), &wave(lead), 5.3, rate).unwrap();
+            assert!((read - lead).abs() < 1.0, "{lead}: {read}");
+        }
+        assert_eq!(phase_lead_deg(&wave(0.0), &[0.3; 500], 5.3, rate), None, "a still signal has no phase");
+        assert_eq!(phase_lead_deg(&wave(0.0), &wave(0.0)[..400], 5.3, rate), None);
+    }
 
     #[test]
     fn finds_a_sine_and_splits_energy_between_two() {

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use crate::controller::{Controller, FlightState};
 use crate::scripted::{ScriptedGait, ScriptedGaitConfig};
-use crate::spectrum::{Fundamental, fundamental};
+use crate::spectrum::{Fundamental, fundamental, phase_lead_deg};
 
 /// Who flies a tracking evaluation: a trained policy, or the scripted gait (the one [`Controller`] that
 /// follows a reference). One name for the concept: a controller decides the joint targets; this enum
@@ -110,9 +110,19 @@ impl EpisodeResult {
 
     /// The fundamental of `joint`'s angle after the first second (the launch transient).
     pub fn fundamental(&self, joint: ActuatedJoint, period_s: f64) -> Option<Fundamental> {
-        let signal: Vec<f64> =
-            self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect();
-        fundamental(&signal, 1.0 / period_s)
+        fundamental(&self.angles_after_launch(joint), 1.0 / period_s)
+    }
+
+    /// How far the left wing's pitch leads its flap (deg) at the flap's fundamental, after the first
+    /// second: 90 for the scripted gait's feathering (`pitch_lead_deg`). `None` without a stroke.
+    pub fn pitch_lead_deg(&self, period_s: f64) -> Option<f64> {
+        let flap = self.angles_after_launch(ActuatedJoint::FlapLeft);
+        let stroke = fundamental(&flap, 1.0 / period_s)?;
+        phase_lead_deg(&flap, &self.angles_after_launch(ActuatedJoint::PitchLeft), stroke.frequency_hz, 1.0 / period_s)
+    }
+
+    fn angles_after_launch(&self, joint: ActuatedJoint) -> Vec<f64> {
+        self.steps.iter().filter(|s| s.time_s >= 1.0).map(|s| s.joint_positions_rad[joint.index()]).collect()
     }
 }
 

@@ -48,6 +48,11 @@ pub struct TrackingSummary {
     pub frequency_hz: [f64; 3],
     #[serde(deserialize_with = "flapper_files::nan_as_null::numbers")]
     pub energy_fraction: [f64; 3],
+    /// How far the left wing's pitch leads its flap (deg) at the flap's fundamental, the circular mean
+    /// over the episodes with a stroke: 90 is the scripted gait's feathering (NaN without a stroke, and
+    /// in summaries written before it).
+    #[serde(default = "not_measured", deserialize_with = "flapper_files::nan_as_null::number")]
+    pub pitch_lead_deg: f64,
     /// Episodes that flew upside down at some point (|roll| beyond 90 deg): expected in loops,
     /// reported because evaluation never ends an episode on attitude.
     pub inverted_episodes: usize,
@@ -104,6 +109,20 @@ impl ManoeuvreFigures {
     }
 }
 
+fn not_measured() -> f64 {
+    f64::NAN
+}
+
+/// The circular mean (deg) of angles in degrees; NaN for none.
+fn circular_mean_deg(angles_deg: &[f64]) -> f64 {
+    if angles_deg.is_empty() {
+        return f64::NAN;
+    }
+    let (sin, cos) =
+        angles_deg.iter().fold((0.0, 0.0), |(s, c), a| (s + a.to_radians().sin(), c + a.to_radians().cos()));
+    sin.atan2(cos).to_degrees()
+}
+
 impl TrackingSummary {
     /// Figures of `results`; `manoeuvre_window_s` (start, end) adds the manoeuvre's figures.
     pub fn of(results: &[EpisodeResult], period_s: f64, manoeuvre_window_s: Option<(f64, f64)>) -> Self {
@@ -136,6 +155,9 @@ impl TrackingSummary {
             energy_per_metre_j: mean(&|r| r.energy_per_metre_j(period_s)),
             frequency_hz,
             energy_fraction,
+            pitch_lead_deg: circular_mean_deg(
+                &results.iter().filter_map(|r| r.pitch_lead_deg(period_s)).collect::<Vec<_>>(),
+            ),
             inverted_episodes: results.iter().filter(|r| r.went_inverted()).count(),
             manoeuvre: manoeuvre_window_s.map(|window| ManoeuvreFigures::of(results, window)),
         }
@@ -181,6 +203,7 @@ impl TrackingSummary {
                 format!("{:.2} Hz, {:.0}%", self.frequency_hz[k], 100.0 * self.energy_fraction[k]),
             ));
         }
+        rows.push(("wing pitch leads the flap (deg)".into(), format!("{:.0}", self.pitch_lead_deg)));
         rows
     }
 }

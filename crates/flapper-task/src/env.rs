@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::action::{ACTION_SIZE, ActionMap, OscillatorState};
 use crate::config::{GLIDE_MIN_RATIO, GLIDE_SINK_MPS, TaskConfig, speed_ramp};
 use crate::control_loop::{ControlLoop, ControlLoopState};
-use crate::flap_rhythm::{FlapRhythm, FlapSwing};
+use crate::flap_rhythm::{FlapRhythm, FlapSwing, StrokeFeathering};
 use crate::observation::{Frame, ObservationBuilder, ObservationLayout, read_frame};
 use crate::randomization::{DrawnDynamics, randomize};
 use crate::reference::Reference;
@@ -94,6 +94,9 @@ pub struct EnvSnapshot {
     /// The flap's swing (`reward.glide_hold_weight`; likewise).
     #[serde(default, skip_serializing_if = "FlapSwing::is_unused")]
     flap_swing: FlapSwing,
+    /// The stroke's feathering (`reward.feathering_weight`; likewise).
+    #[serde(default, skip_serializing_if = "StrokeFeathering::is_unused")]
+    feathering: StrokeFeathering,
     episode_return: f64,
     term_sums: RewardTerms,
 }
@@ -141,6 +144,8 @@ pub struct FlightEnv {
     flap_rhythm: FlapRhythm,
     /// The left flap's swing over the last 0.4 s, for r_glide_hold (likewise).
     flap_swing: FlapSwing,
+    /// The wings' pitch against their flap rate over the last 0.4 s, for r_feathering (likewise).
+    feathering: StrokeFeathering,
     episode_return: f64,
     term_sums: RewardTerms,
     drawn: DrawnDynamics,
@@ -180,6 +185,7 @@ impl FlightEnv {
             oscillator: OscillatorState::default(),
             flap_rhythm: FlapRhythm::default(),
             flap_swing: FlapSwing::default(),
+            feathering: StrokeFeathering::default(),
             episode_return: 0.0,
             term_sums: RewardTerms::default(),
             drawn: DrawnDynamics::default(),
@@ -233,6 +239,7 @@ impl FlightEnv {
         self.oscillator = self.actions.oscillator_at_rest(&self.previous_action);
         self.flap_rhythm = FlapRhythm::default();
         self.flap_swing = FlapSwing::default();
+        self.feathering = StrokeFeathering::default();
         self.episode_return = 0.0;
         self.term_sums = RewardTerms::default();
         self.observation.reset(read_frame(self.control.sim(), &self.previous_action));
@@ -312,6 +319,16 @@ impl FlightEnv {
         if self.config.reward.glide_hold_weight > 0.0 {
             self.flap_swing.update(flap_rad);
         }
+        if self.config.reward.feathering_weight > 0.0 {
+            let (angles, rates) = (sim.joint_positions(), sim.joint_velocities());
+            let common =
+                |left: ActuatedJoint, right: ActuatedJoint, of: &[f64]| 0.5 * (of[left.index()] + of[right.index()]);
+            self.feathering.update(
+                common(ActuatedJoint::FlapLeft, ActuatedJoint::FlapRight, &rates),
+                common(ActuatedJoint::PitchLeft, ActuatedJoint::PitchRight, &angles),
+            );
+        }
+        let glide_weighed = self.config.reward.glide_hold_weight > 0.0 || self.config.reward.feathering_weight > 0.0;
         let terms = RewardTerms::evaluate(
             &self.config.reward,
             &RewardInputs {
@@ -323,8 +340,9 @@ impl FlightEnv {
                 action_change,
                 flap_hz: self.flap_rhythm.frequency_hz(time),
                 flap_swing_deg: self.flap_swing.range_deg(),
-                // Read only where r_glide_hold is weighed: it looks along the lookahead for turns.
-                glide_share: if self.config.reward.glide_hold_weight > 0.0 { self.glide_share() } else { 0.0 },
+                // Read only where r_glide_hold or r_feathering is weighed: it looks along the lookahead for turns.
+                glide_share: if glide_weighed { self.glide_share() } else { 0.0 },
+                feathering: self.feathering.correlation(),
             },
         )
         .with_position_weighed(self.position_factor())
@@ -371,6 +389,7 @@ impl FlightEnv {
             oscillator: self.oscillator,
             flap_rhythm: self.flap_rhythm,
             flap_swing: self.flap_swing,
+            feathering: self.feathering,
             episode_return: self.episode_return,
             term_sums: self.term_sums,
         }
@@ -400,6 +419,7 @@ impl FlightEnv {
         self.oscillator = snapshot.oscillator;
         self.flap_rhythm = snapshot.flap_rhythm;
         self.flap_swing = snapshot.flap_swing;
+        self.feathering = snapshot.feathering;
         self.episode_return = snapshot.episode_return;
         self.term_sums = snapshot.term_sums;
         Ok(())

@@ -137,6 +137,67 @@ impl FlapSwing {
     }
 }
 
+/// The wings' common pitch against their common flap rate over the last [`FLAP_SWING_WINDOW_STEPS`]
+/// (0.4 s), for the reward's pay for feathering (`reward.feathering_weight`): a stroke whose pitch
+/// leads its flap by a quarter period (the scripted gait's, `pitch_lead_deg` 90) moves the pitch with
+/// the flap's rate, and reads a correlation of 1; one lagging by a quarter period reads -1. Carried
+/// across control steps and in environment snapshots (left out at its default, when not weighed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StrokeFeathering {
+    flap_rates_radps: [f64; FLAP_SWING_WINDOW_STEPS],
+    pitches_rad: [f64; FLAP_SWING_WINDOW_STEPS],
+    next: usize,
+    seen: usize,
+}
+
+/// The flap rate's spread (rad/s, standard deviation over the window) under which the wing counts as
+/// held and the correlation reads 0: a 10 deg peak-to-peak stroke at 4 Hz ([`HELD_FLAP_RANGE_DEG`]).
+const HELD_FLAP_RATE_RADPS: f64 =
+    0.5 * HELD_FLAP_RANGE_DEG * std::f64::consts::PI / 180.0 * std::f64::consts::TAU * 4.0 / std::f64::consts::SQRT_2;
+
+impl StrokeFeathering {
+    /// Nothing seen yet.
+    pub fn is_unused(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Takes one control step's common flap rate (rad/s, mean of the two wings) and common wing pitch
+    /// (rad, likewise; their difference rolls the robot and is left out).
+    pub fn update(&mut self, flap_rate_radps: f64, pitch_rad: f64) {
+        self.flap_rates_radps[self.next] = flap_rate_radps;
+        self.pitches_rad[self.next] = pitch_rad;
+        self.next = (self.next + 1) % FLAP_SWING_WINDOW_STEPS;
+        self.seen = (self.seen + 1).min(FLAP_SWING_WINDOW_STEPS);
+    }
+
+    /// The correlation of pitch with flap rate over the window, in [-1, 1]; 0 before two steps, for a
+    /// held wing (its flap rate's spread under a 10 deg, 4 Hz stroke's) or a pitch that does not move
+    /// (its spread under 0.1 deg).
+    pub fn correlation(&self) -> f64 {
+        let n = self.seen;
+        if n < 2 {
+            return 0.0;
+        }
+        let (rates, pitches) = (&self.flap_rates_radps[..n], &self.pitches_rad[..n]);
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / n as f64;
+        let (rate_mean, pitch_mean) = (mean(rates), mean(pitches));
+        let (mut cross, mut rate_var, mut pitch_var) = (0.0, 0.0, 0.0);
+        for (r, p) in rates.iter().zip(pitches) {
+            let (dr, dp) = (r - rate_mean, p - pitch_mean);
+            cross += dr * dp;
+            rate_var += dr * dr;
+            pitch_var += dp * dp;
+        }
+        let still_pitch_rad = 0.1f64.to_radians();
+        if rate_var / (n as f64) < HELD_FLAP_RATE_RADPS * HELD_FLAP_RATE_RADPS
+            || pitch_var / (n as f64) < still_pitch_rad * still_pitch_rad
+        {
+            return 0.0;
+        }
+        (cross / (rate_var * pitch_var).sqrt()).clamp(-1.0, 1.0)
+    }
+}
+
 /// Largest minus smallest value (negative infinity for none): the swing's range here, and each window's
 /// in `flapper modes`.
 pub fn peak_to_peak(values: &[f64]) -> f64 {
@@ -147,6 +208,30 @@ pub fn peak_to_peak(values: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `seconds` of a 5 Hz stroke, 20 deg of flap, its pitch leading by `lead_deg` (`pitch_deg` amplitude).
+    fn feathering_of(lead_deg: f64, flap_deg: f64, pitch_deg: f64, seconds: f64) -> StrokeFeathering {
+        let (omega, dt) = (std::f64::consts::TAU * 5.0, 0.02);
+        let mut feathering = StrokeFeathering::default();
+        for k in 0..(seconds / dt) as usize {
+            let t = k as f64 * dt;
+            let flap_rate = flap_deg.to_radians() * omega * (omega * t).cos();
+            feathering.update(flap_rate, pitch_deg.to_radians() * (omega * t + lead_deg.to_radians()).sin() + 0.1);
+        }
+        feathering
+    }
+
+    #[test]
+    fn feathering_reads_the_pitch_s_lead_on_the_flap_and_nothing_for_a_held_wing() {
+        assert!(feathering_of(90.0, 20.0, 10.0, 1.0).correlation() > 0.99, "a quarter period ahead: 1");
+        assert!(feathering_of(-90.0, 20.0, 10.0, 1.0).correlation() < -0.99, "a quarter period behind: -1");
+        let half_way = feathering_of(45.0, 20.0, 10.0, 1.0).correlation();
+        assert!((half_way - 45f64.to_radians().cos()).abs() < 0.05, "{half_way}");
+        assert_eq!(feathering_of(90.0, 2.0, 10.0, 1.0).correlation(), 0.0, "a held wing reads 0");
+        assert_eq!(feathering_of(90.0, 20.0, 0.0, 1.0).correlation(), 0.0, "a still pitch reads 0");
+        assert_eq!(StrokeFeathering::default().correlation(), 0.0);
+        assert!(StrokeFeathering::default().is_unused() && !feathering_of(90.0, 20.0, 10.0, 0.1).is_unused());
+    }
 
     const PERIOD_S: f64 = 0.02;
 

@@ -12,6 +12,7 @@
 //! | r_action_rate | exp(-d^2 / s^2), d = norm of the change of the applied action since the last step | s = 1.0 |
 //! | r_flap_rate | exp(-x^2 / s^2), x = how far the flap's frequency is above `flap_max_hz` (0 below) | s = 0.5 Hz |
 //! | r_glide_hold | g exp(-a^2 / s^2), a = the flap's swing over 0.4 s, g = how much the path glides (0-1) | s = 10 deg |
+//! | r_feathering | (1 - g)(1 + c) / 2, c = the correlation of the wings' pitch with their flap rate over 0.4 s | - |
 //!
 //! r_action_rate is not the paper's: its weight is 0 unless a config sets `action_rate_weight`. It
 //! prices a quick change of what the policy asks (a dither) without pricing a steady flap. Nor is
@@ -22,7 +23,10 @@
 //! by how little the flap swings ([`crate::flap_rhythm::FlapSwing`]), and nothing elsewhere: the
 //! paper's "gliding instead of flapping when possible" asked for directly. Nor is r_pos's g: 1 + the
 //! gain `position_dive_gain` where the path dives steeper than a glide slope (0 unless set), a dearer
-//! miss where the robot must flap to brake and steer.
+//! miss where the robot must flap to brake and steer. Nor is r_feathering (weight 0 unless
+//! `feathering_weight` is set): it pays a wing pitch that leads the flap by a quarter period
+//! ([`crate::flap_rhythm::StrokeFeathering`], c = 1; a lag reads -1 and earns 0), the scripted gait's
+//! feathering, off the glide slopes.
 
 use crate::config::RewardConfig;
 
@@ -43,6 +47,9 @@ pub struct RewardTerms {
     /// 0 unless weighed (`reward.glide_hold_weight`) on a glide slope; left out of snapshots at 0, likewise.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub glide_hold: f64,
+    /// 0 unless weighed (`reward.feathering_weight`); left out of snapshots at 0, likewise.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub feathering: f64,
 }
 
 /// A kernel's value `kernel` with its price paid by `share`: 1 - share (1 - kernel), and in full (1) the
@@ -73,6 +80,8 @@ pub struct RewardInputs {
     /// How much the reference glides here: 0 on level paths, climbs and steeper dives, up to 1 on a glide
     /// slope ([`crate::env::FlightEnv::glide_share`]).
     pub glide_share: f64,
+    /// The wings' pitch against their flap rate, in [-1, 1] ([`crate::flap_rhythm::StrokeFeathering`]).
+    pub feathering: f64,
 }
 
 impl RewardTerms {
@@ -91,6 +100,11 @@ impl RewardTerms {
             },
             glide_hold: if config.glide_hold_weight > 0.0 {
                 x.glide_share.clamp(0.0, 1.0) * gaussian(x.flap_swing_deg, config.glide_hold_scale_deg)
+            } else {
+                0.0
+            },
+            feathering: if config.feathering_weight > 0.0 {
+                (1.0 - x.glide_share.clamp(0.0, 1.0)) * 0.5 * (1.0 + x.feathering.clamp(-1.0, 1.0))
             } else {
                 0.0
             },
@@ -126,6 +140,7 @@ impl RewardTerms {
             + config.action_rate_weight * self.action_rate
             + config.flap_rate_weight * self.flap_rate
             + config.glide_hold_weight * self.glide_hold
+            + config.feathering_weight * self.feathering
     }
 
     pub fn add(&mut self, other: &Self) {
@@ -136,6 +151,7 @@ impl RewardTerms {
         self.action_rate += other.action_rate;
         self.flap_rate += other.flap_rate;
         self.glide_hold += other.glide_hold;
+        self.feathering += other.feathering;
     }
 }
 
@@ -153,6 +169,7 @@ mod tests {
             action_rate: 0.6,
             flap_rate: 0.5,
             glide_hold: 0.4,
+            feathering: 0.3,
         };
         assert_eq!(terms.with_energy_priced(1.0), terms, "in full: unchanged, bit for bit");
         assert_eq!(terms.with_energy_priced(0.0), RewardTerms { energy: 1.0, ..terms }, "waived: the top");
@@ -171,6 +188,7 @@ mod tests {
             flap_hz: 5.0,
             flap_swing_deg: 0.0,
             glide_share: 0.0,
+            feathering: 0.0,
         }
     }
 
@@ -186,7 +204,7 @@ mod tests {
             action_rate: 1.0,
             ..Default::default()
         };
-        assert_eq!(terms, ones, "r_flap_rate and r_glide_hold read 0 unless weighed");
+        assert_eq!(terms, ones, "r_flap_rate, r_glide_hold and r_feathering read 0 unless weighed");
         assert!((terms.total(&c) - 0.85).abs() < 1e-12);
     }
 
@@ -278,5 +296,19 @@ mod tests {
         // At the scale, a term is 1/e.
         let at_scale = RewardTerms::evaluate(&c, &RewardInputs { position_error_m: 1.0, ..ideal() });
         assert!((at_scale.position - (-1f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn feathering_pays_a_pitch_ahead_of_the_flap_only_when_weighed_and_nothing_on_a_glide_slope() {
+        let mut c = RewardConfig::default();
+        let ahead = RewardInputs { feathering: 1.0, ..ideal() };
+        let behind = RewardInputs { feathering: -1.0, ..ideal() };
+        assert_eq!(RewardTerms::evaluate(&c, &ahead).total(&c), RewardTerms::evaluate(&c, &behind).total(&c));
+        c.feathering_weight = 0.05;
+        let (pay_ahead, pay_behind) = (RewardTerms::evaluate(&c, &ahead), RewardTerms::evaluate(&c, &behind));
+        assert_eq!((pay_ahead.feathering, pay_behind.feathering), (1.0, 0.0));
+        assert!((pay_ahead.total(&c) - pay_behind.total(&c) - 0.05).abs() < 1e-12);
+        let gliding = RewardInputs { glide_share: 1.0, ..ahead };
+        assert_eq!(RewardTerms::evaluate(&c, &gliding).feathering, 0.0, "the glide slopes pay the held wing");
     }
 }

@@ -974,3 +974,47 @@ fn training_episodes_start_along_the_path_where_asked_and_fixed_references_never
     assert_eq!(env.reference().len(), northbound().len());
     assert!((env.control().sim().base_position_m() - northbound().target(0)).length() < 1e-9);
 }
+
+/// A 5 Hz stroke whose wing pitch leads the flap by `lead_deg`, as actions.
+fn feathered_stroke(k: usize, lead_deg: f64) -> [f32; 5] {
+    let phase = std::f64::consts::TAU * 5.0 * k as f64 * 0.02;
+    let flap = (0.8 * phase.sin()) as f32;
+    let pitch = (0.5 * (phase + lead_deg.to_radians()).sin()) as f32;
+    [flap, pitch, flap, pitch, -0.2]
+}
+
+#[test]
+fn the_feathering_term_pays_a_pitch_ahead_of_the_flap_and_joins_the_reward_only_when_weighted() {
+    let fly = |weight: f64, lead_deg: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.feathering_weight = weight;
+        let mut env = env_on(config, sloped(0.0));
+        (0..40).map(|k| env.step(&feathered_stroke(k, lead_deg))).collect::<Vec<_>>()
+    };
+    let (ahead, behind) = (fly(0.2, 90.0), fly(0.2, -90.0));
+    let last =
+        |steps: &[flapper_task::env::StepResult]| steps[30..].iter().map(|s| s.terms.feathering).sum::<f64>() / 10.0;
+    assert!(last(&ahead) > 0.8, "{:?}", ahead[39].terms);
+    assert!(last(&behind) < 0.2, "{:?}", behind[39].terms);
+    let unweighed = fly(0.0, 90.0);
+    for (w, u) in ahead.iter().zip(&unweighed) {
+        assert_eq!(u.terms.feathering, 0.0);
+        assert!((w.reward - u.reward - 0.2 * w.terms.feathering).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn a_snapshot_continues_the_feathering_it_reads() {
+    let mut config = exact_start(TaskConfig::default());
+    config.reward.feathering_weight = 0.2;
+    let mut original = env_on(config.clone(), sloped(0.0));
+    (0..30).for_each(|k| _ = original.step(&feathered_stroke(k, 90.0)));
+    let snapshot = original.snapshot();
+    let mut resumed = env_on(config, sloped(0.0));
+    (0..7).for_each(|k| _ = resumed.step(&feathered_stroke(k, -90.0)));
+    resumed.restore(&snapshot).unwrap();
+    for k in 30..45 {
+        let (a, b) = (original.step(&feathered_stroke(k, 90.0)), resumed.step(&feathered_stroke(k, 90.0)));
+        assert_eq!((a.reward, a.terms), (b.reward, b.terms), "step {k}");
+    }
+}

@@ -10,9 +10,10 @@ use flapper_task::{FlightVecEnv, ReferenceSource, TaskConfig};
 pub const REWARD_TERM_NAMES: [&str; 4] = ["r_position", "r_body_rate", "r_level", "r_energy"];
 
 /// The diagnostics logged after [`REWARD_TERM_NAMES`], in this order, each only when the task weighs it
-/// (`reward.action_rate_weight`, `reward.flap_rate_weight`, `reward.glide_hold_weight` above 0), so that
-/// the logs of runs without them keep their columns and resume as they were written.
-pub const WEIGHED_TERM_NAMES: [&str; 3] = ["r_action_rate", "r_flap_rate", "r_glide_hold"];
+/// (`reward.action_rate_weight`, `reward.flap_rate_weight`, `reward.glide_hold_weight`,
+/// `reward.feathering_weight` above 0), so that the logs of runs without them keep their columns and
+/// resume as they were written.
+pub const WEIGHED_TERM_NAMES: [&str; 4] = ["r_action_rate", "r_flap_rate", "r_glide_hold", "r_feathering"];
 
 /// Mixed into the run seed for the first episodes' lengths (a stream apart from the environments').
 const FIRST_EPISODE_SEED: u64 = 0x5eed_f125_7e9a_0001;
@@ -41,7 +42,7 @@ pub struct FlightEnvs {
     inner: FlightVecEnv,
     diagnostics: Vec<f32>,
     /// Which of [`WEIGHED_TERM_NAMES`] are logged.
-    logs_weighed: [bool; 3],
+    logs_weighed: [bool; 4],
     /// `reward.smoothness_turn_scale_degps` above 0: the learner's smoothness term is weighted per step.
     weighs_smoothness: bool,
 }
@@ -57,7 +58,8 @@ impl FlightEnvs {
         threads: usize,
     ) -> Result<Self, ModelError> {
         let r = &task.reward;
-        let logs_weighed = [r.action_rate_weight, r.flap_rate_weight, r.glide_hold_weight].map(|w| w > 0.0);
+        let logs_weighed =
+            [r.action_rate_weight, r.flap_rate_weight, r.glide_hold_weight, r.feathering_weight].map(|w| w > 0.0);
         let weighs_smoothness = task.reward.weighs_smoothness();
         let mut inner = FlightVecEnv::new(robot, task, ReferenceSource::Procedural, count, seed, threads)?;
         inner.spread_first_time_limits(seed ^ FIRST_EPISODE_SEED);
@@ -102,7 +104,7 @@ impl VecEnv for FlightEnvs {
         self.inner.step(actions)?;
         let per_env = self.logged_terms();
         for (out, t) in self.diagnostics.chunks_exact_mut(per_env).zip(self.inner.reward_terms()) {
-            let weighed = self.logs_weighed.into_iter().zip([t.action_rate, t.flap_rate, t.glide_hold]);
+            let weighed = self.logs_weighed.into_iter().zip([t.action_rate, t.flap_rate, t.glide_hold, t.feathering]);
             let logged =
                 [(true, t.position), (true, t.body_rate), (true, t.level), (true, t.energy)].into_iter().chain(weighed);
             for (o, (_, value)) in out.iter_mut().zip(logged.filter(|(logged, _)| *logged)) {
