@@ -103,6 +103,9 @@ pub struct GaitFlight {
     pub energy_per_metre_j: f64,
     /// Largest distance from the window's first altitude (m).
     pub altitude_deviation_m: f64,
+    /// Root mean square of the body rates' norm (p, q, r; rad/s): how much the stroke shakes the body,
+    /// what the reward's r_rate prices.
+    pub body_rate_rms_radps: f64,
 }
 
 impl GaitFlight {
@@ -139,6 +142,8 @@ pub fn fly_gait(robot: &RobotModel, gait: &ScriptedGaitConfig) -> Result<GaitFli
             .iter()
             .map(|r| (r.state.position_m.z - first_altitude_m).abs())
             .fold(if completed { 0.0 } else { f64::INFINITY }, f64::max),
+        body_rate_rms_radps: (settled.iter().map(|r| r.state.body_rates_radps.length_squared()).sum::<f64>() / n)
+            .sqrt(),
     })
 }
 
@@ -325,6 +330,7 @@ struct GaitRow {
     power_w: f64,
     energy_per_metre_j: f64,
     altitude_deviation_m: f64,
+    body_rate_rms_radps: f64,
 }
 
 impl GaitRow {
@@ -341,6 +347,7 @@ impl GaitRow {
             power_w: f.power_w,
             energy_per_metre_j: f.energy_per_metre_j,
             altitude_deviation_m: f.altitude_deviation_m,
+            body_rate_rms_radps: f.body_rate_rms_radps,
         }
     }
 }
@@ -478,6 +485,7 @@ mod tests {
             power_w: energy_per_metre_j * speed_mps,
             energy_per_metre_j,
             altitude_deviation_m,
+            body_rate_rms_radps: 0.0,
         }
     }
 

@@ -39,3 +39,20 @@ fn a_policy_on_a_level_path_flies_the_path_s_speed() {
     assert!((level.speed_mps - 4.5).abs() < 0.2, "it tracks the path: {level:?}");
     assert!(level.power_w > 0.0 && level.energy_per_metre_j > 0.0, "{level:?}");
 }
+
+#[test]
+fn a_wing_pitch_behind_the_flap_steadies_the_body_and_costs_power() {
+    let robot = RobotModel::flapper().unwrap();
+    let gait = |pitch_lead_deg: f64| ScriptedGaitConfig {
+        frequency_hz: 5.0,
+        pitch_lead_deg,
+        pitch_amplitude_deg: 20.0,
+        body_pitch_deg: 15.0,
+        tail_trim_deg: -10.0,
+        ..ScriptedGaitConfig::default()
+    };
+    let (ahead, behind) = (fly_gait(&robot, &gait(0.0)).unwrap(), fly_gait(&robot, &gait(-75.0)).unwrap());
+    assert!(ahead.completed && behind.completed, "{ahead:?} {behind:?}");
+    assert!(behind.body_rate_rms_radps < 0.85 * ahead.body_rate_rms_radps, "{behind:?} against {ahead:?}");
+    assert!(behind.power_w > 2.0 * ahead.power_w, "{behind:?} against {ahead:?}");
+}

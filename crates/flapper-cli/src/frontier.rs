@@ -38,9 +38,26 @@ pub struct FrontierArgs {
     pub out: PathBuf,
 }
 
+/// Each `--policy` loaded with its `--label` (given in order; the default for the rest): more labels
+/// than policies, or an empty one, is refused before any file is read.
+pub fn load_labelled(policies: &[PathBuf], labels: &[String]) -> Result<Vec<FrontierPolicy>> {
+    if labels.len() > policies.len() {
+        bail!("--label given {} times for {} --policy: one name per policy, in order", labels.len(), policies.len());
+    }
+    if let Some(empty) = labels.iter().position(|l| l.trim().is_empty()) {
+        bail!("--label number {} is empty", empty + 1);
+    }
+    let loaded = policies
+        .iter()
+        .enumerate()
+        .map(|(k, path)| FrontierPolicy::load(labels.get(k).cloned().unwrap_or_else(|| default_label(path)), path))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(loaded)
+}
+
 /// A policy's name when no --label gives one: its folder's for a run's `policy.safetensors`, else
 /// the file's name without its extension (a checkpoint).
-pub fn default_label(path: &Path) -> String {
+fn default_label(path: &Path) -> String {
     let folder =
         path.parent().and_then(Path::file_name).filter(|_| path.file_name() == Some("policy.safetensors".as_ref()));
     folder.or_else(|| path.file_stem()).map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
@@ -51,22 +68,12 @@ pub fn frontier_command(robot: &RobotModel, args: &FrontierArgs) -> Result<()> {
     if *episodes == 0 || *episodes > 100_000 {
         bail!("--episodes must be 1 to 100000, got {episodes}");
     }
-    if labels.len() > policies.len() {
-        bail!("--label given {} times for {} --policy: one name per policy, in order", labels.len(), policies.len());
-    }
-    if let Some(empty) = labels.iter().position(|l| l.trim().is_empty()) {
-        bail!("--label number {} is empty", empty + 1);
-    }
     // Everything is read before anything is flown: a bad file stops the command at once.
+    let loaded = load_labelled(policies, labels)?;
     let points = match points_file {
         Some(file) => read_frontier_csv(file)?,
         None => Vec::new(),
     };
-    let loaded = policies
-        .iter()
-        .enumerate()
-        .map(|(k, path)| FrontierPolicy::load(labels.get(k).cloned().unwrap_or_else(|| default_label(path)), path))
-        .collect::<Result<Vec<_>, _>>()?;
     crate::output_dir::prepare_output_dir(out)?;
     let settings = FrontierSettings {
         episodes: *episodes,

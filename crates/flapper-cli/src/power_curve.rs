@@ -5,7 +5,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
-use flapper_analysis::frontier::FrontierPolicy;
 use flapper_analysis::power_curve::{
     GAIT_FLIGHT_S, GaitFamily, LEVEL_TOLERANCE_M, PowerCurve, PowerCurveSettings, SETTLED_AFTER_S, SPEED_BIN_MPS,
     measure_power_curve, step_count, write_power_curve,
@@ -13,7 +12,7 @@ use flapper_analysis::power_curve::{
 use flapper_sim::RobotModel;
 
 use crate::flag_values::{count, seed};
-use crate::frontier::default_label;
+use crate::frontier::load_labelled;
 
 /// Slowest and fastest level path a policy is asked to fly (m/s).
 const SPEED_LIMITS_MPS: (f64, f64) = (1.0, 12.0);
@@ -73,18 +72,8 @@ pub fn power_curve_command(robot: &RobotModel, args: &PowerCurveArgs) -> Result<
     if speeds_mps.is_empty() || speeds_mps.len() > 100 {
         bail!("--speeds: give 1 to 100 speeds, got {}", speeds_mps.len());
     }
-    if labels.len() > policies.len() {
-        bail!("--label given {} times for {} --policy: one name per policy, in order", labels.len(), policies.len());
-    }
-    if let Some(empty) = labels.iter().position(|l| l.trim().is_empty()) {
-        bail!("--label number {} is empty", empty + 1);
-    }
     // Every policy is read before anything is flown: a bad file stops the command at once.
-    let loaded = policies
-        .iter()
-        .enumerate()
-        .map(|(k, path)| FrontierPolicy::load(labels.get(k).cloned().unwrap_or_else(|| default_label(path)), path))
-        .collect::<Result<Vec<_>, _>>()?;
+    let loaded = load_labelled(policies, labels)?;
     crate::output_dir::prepare_output_dir(out)?;
     let settings =
         PowerCurveSettings { family, policy_speeds_mps: speeds_mps.clone(), episodes: *episodes, seed: *seed };

@@ -70,6 +70,12 @@ impl DeploymentFacts {
         if layout.clock {
             return Err(DeployError::Clock { path: path.to_owned(), clock_hz: task.observation.clock_hz });
         }
+        if task.control.passive_feathering_s > 0.0 {
+            return Err(DeployError::PassiveFeathering {
+                path: path.to_owned(),
+                feathering_s: task.control.passive_feathering_s,
+            });
+        }
         let sim = robot.instantiate()?;
         let control_period_s = task.control_period_s(robot.timestep_s());
         let actions = ActionMap::new(&sim, &task.control, control_period_s);

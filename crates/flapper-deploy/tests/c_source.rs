@@ -121,3 +121,21 @@ fn the_export_refuses_a_policy_that_reads_a_clock() {
     assert!(error.contains("clocked.safetensors") && error.contains("5.3 Hz clock"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_export_refuses_a_policy_trained_with_passive_feathering() {
+    use flapper_ppo::checkpoint;
+    let robot = RobotModel::flapper().unwrap();
+    let source = checkpoint::load(&shipped("policies/history/stage1/policy.safetensors")).unwrap();
+    let mut config: toml::Table = source.info.config_toml.parse().unwrap();
+    let task = config.entry("task").or_insert(toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
+    let control = task.entry("control").or_insert(toml::Value::Table(toml::Table::new()));
+    control.as_table_mut().unwrap().insert("passive_feathering_s".into(), toml::Value::Float(0.03));
+    let info = checkpoint::CheckpointInfo { config_toml: toml::to_string(&config).unwrap(), ..source.info.clone() };
+    let dir = scratch("feathering");
+    let path = dir.join("feathered.safetensors");
+    checkpoint::save(&path, &info, &source.policy, None, None).unwrap();
+    let error = DeployablePolicy::load(&path, &robot).expect_err("a feathered policy is refused").to_string();
+    assert!(error.contains("feathered.safetensors") && error.contains("passive_feathering_s = 0.03"), "{error}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -200,6 +200,8 @@ pub fn evaluate_tracking_randomized(
 fn controller_task(controller: &TrackingController, mut config: TaskConfig) -> TaskConfig {
     if let TrackingController::Scripted(_) = controller {
         config.control.action_mode = flapper_task::config::ActionMode::JointTargets;
+        // The scripted gait shapes its own wing pitch: the yardstick stays the same gait.
+        config.control.passive_feathering_s = 0.0;
     }
     config
 }

@@ -110,6 +110,23 @@ impl ActionMap {
         current + (self.shape_step_fraction * (asked - current)).clamp(-self.shape_max_step, self.shape_max_step)
     }
 
+    /// Adds passive feathering to `targets`: each wing's pitch target plus `feathering_s` times its own
+    /// flap rate in `joint_velocities_radps`, clipped to the pitch limit (`control.passive_feathering_s`).
+    pub fn feather(
+        &self,
+        targets: &mut [f64; N_ACTUATED_JOINTS],
+        joint_velocities_radps: &[f64; N_ACTUATED_JOINTS],
+        feathering_s: f64,
+    ) {
+        for (flap, pitch) in
+            [(ActuatedJoint::FlapLeft, ActuatedJoint::PitchLeft), (ActuatedJoint::FlapRight, ActuatedJoint::PitchRight)]
+        {
+            let limit = self.half_range_rad[pitch.index()];
+            let twisted = targets[pitch.index()] + feathering_s * joint_velocities_radps[flap.index()];
+            targets[pitch.index()] = twisted.clamp(-limit, limit);
+        }
+    }
+
     /// Joint targets (rad) for an action. `oscillator` is the oscillator's state, which this advances
     /// (`flap_oscillator`; untouched in `joint_targets` mode).
     pub fn to_targets(&self, action: &[f32], oscillator: &mut OscillatorState) -> [f64; N_ACTUATED_JOINTS] {

@@ -80,6 +80,17 @@ pub struct ControlConfig {
     /// wing pitch) (`flap_oscillator` only); 0 leaves them free. Unlike the filter it delays no slow change: it
     /// bounds how fast the stroke's shape moves, so a dither between steps shrinks to this rate.
     pub flap_shape_rate_limit: f64,
+    /// Passive feathering (s; not the paper's, 0 leaves it out of the control and of a written config):
+    /// each wing's pitch target gets this times its own flap joint's rate (rad/s), as a wing that twists
+    /// under its stroke would, so that the pitch leads the flap by a quarter period (the scripted gait's
+    /// shape) whatever the policy asks (docs/experiments.md, "The learned stroke feathers backwards").
+    /// A policy trained with it needs it on the robot: `flapper export-policy` refuses one.
+    #[serde(skip_serializing_if = "is_zero_seconds")]
+    pub passive_feathering_s: f64,
+}
+
+fn is_zero_seconds(value: &f64) -> bool {
+    *value == 0.0
 }
 
 /// What an action asks for.
@@ -446,6 +457,7 @@ impl Default for ControlConfig {
             flap_amplitude_max: 1.0,
             flap_shape_filter_hz: 0.0,
             flap_shape_rate_limit: 0.0,
+            passive_feathering_s: 0.0,
         }
     }
 }
@@ -688,6 +700,7 @@ impl TaskConfig {
             ("control.flap_amplitude_max", self.control.flap_amplitude_max, 0.1, 3.0),
             ("control.flap_shape_filter_hz", self.control.flap_shape_filter_hz, 0.0, 100.0),
             ("control.flap_shape_rate_limit", self.control.flap_shape_rate_limit, 0.0, 1000.0),
+            ("control.passive_feathering_s", self.control.passive_feathering_s, 0.0, 0.2),
             ("reward.position_scale_m", r.position_scale_m, 1e-3, 1e3),
             ("reward.body_rate_scale_radps", r.body_rate_scale_radps, 1e-3, 1e3),
             ("reward.level_scale_rad", r.level_scale_rad, 1e-3, 1e3),

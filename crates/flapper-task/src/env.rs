@@ -298,7 +298,12 @@ impl FlightEnv {
 
     /// Applies `action` for one control step. Does not reset: when `end` is set, call `reset`.
     pub fn step(&mut self, action: &[f32]) -> StepResult {
-        let targets = self.actions.to_targets(action, &mut self.oscillator);
+        let mut targets = self.actions.to_targets(action, &mut self.oscillator);
+        let feathering_s = self.config.control.passive_feathering_s;
+        if feathering_s > 0.0 {
+            // The twist is part of the target applied, and of the previous action the policy observes.
+            self.actions.feather(&mut targets, &self.control.sim().joint_velocities(), feathering_s);
+        }
         let fault = self.control.step(&targets).err();
         self.step += 1;
         let applied = self.actions.applied(action, &targets);

@@ -282,3 +282,23 @@ fn a_wing_pitch_second_action_pitches_both_wings_alike_at_a_fixed_frequency_and_
     let first = map.to_targets(&at_rest, &mut oscillator);
     assert!(first.iter().zip(pose).all(|(t, p)| (t - p).abs() < 1e-6), "{first:?} from {pose:?}");
 }
+
+#[test]
+fn passive_feathering_adds_each_wing_s_own_flap_rate_to_its_pitch_within_the_limit() {
+    let map = action_map(ActionMode::JointTargets);
+    let half = map.half_range_rad();
+    let mut oscillator = OscillatorState::default();
+    let asked = map.to_targets(&[0.3, 0.1, -0.3, -0.1, 0.2], &mut oscillator);
+    // The left wing flapping up at 8 rad/s, the right one down at 2 rad/s.
+    let rates = [8.0, 0.0, -2.0, 0.0, 0.0];
+    let mut feathered = asked;
+    map.feather(&mut feathered, &rates, 0.02);
+    assert!((feathered[PITCH_LEFT] - (asked[PITCH_LEFT] + 0.16)).abs() < 1e-12);
+    assert!((feathered[PITCH_RIGHT] - (asked[PITCH_RIGHT] - 0.04)).abs() < 1e-12);
+    for joint in [FLAP, FLAP_RIGHT, TAIL] {
+        assert_eq!(feathered[joint], asked[joint], "only the wing pitch twists");
+    }
+    let mut fast = asked;
+    map.feather(&mut fast, &[1e3, 0.0, -1e3, 0.0, 0.0], 0.2);
+    assert_eq!((fast[PITCH_LEFT], fast[PITCH_RIGHT]), (half[PITCH_LEFT], -half[PITCH_RIGHT]), "clipped to the limit");
+}

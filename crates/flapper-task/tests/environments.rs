@@ -1018,3 +1018,25 @@ fn a_snapshot_continues_the_feathering_it_reads() {
         assert_eq!((a.reward, a.terms), (b.reward, b.terms), "step {k}");
     }
 }
+
+#[test]
+fn passive_feathering_leads_a_stroke_that_asks_for_no_pitch() {
+    let stroke_only = |k: usize| {
+        let flap = (0.8 * (std::f64::consts::TAU * 5.0 * k as f64 * 0.02).sin()) as f32;
+        [flap, 0.0, flap, 0.0, -0.2]
+    };
+    let feathering = |feathering_s: f64| {
+        let mut config = exact_start(TaskConfig::default());
+        config.reward.feathering_weight = 0.2;
+        config.control.passive_feathering_s = feathering_s;
+        let mut env = env_on(config, sloped(0.0));
+        let steps: Vec<_> = (0..40).map(|k| env.step(&stroke_only(k))).collect();
+        steps[30..].iter().map(|s| s.terms.feathering).sum::<f64>() / 10.0
+    };
+    // Without it the pitch moves only as the airflow and the flap's motion push it (measured: r_feathering
+    // 0.40); with it the pitch swings with the flap's rate, behind it by the filter's and the servo's lag,
+    // and leads the stroke (0.67).
+    let (still, twisted) = (feathering(0.0), feathering(0.03));
+    assert!(twisted > 0.6, "{still} -> {twisted}");
+    assert!(twisted > still + 0.2, "{still} -> {twisted}");
+}

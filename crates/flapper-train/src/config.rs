@@ -108,17 +108,19 @@ mod tests {
         assert_eq!(again, c);
         assert!(!c.to_toml().contains("smoothness_norm"), "the default norm is left out of a written config");
         assert!(!c.to_toml().contains("smoothness_action_scale"), "so are the default shares");
-        for key in ["flap_rate", "flap_max_hz", "glide_hold", "clock_hz"] {
+        for key in ["flap_rate", "flap_max_hz", "glide_hold", "clock_hz", "feathering"] {
             assert!(
                 !c.to_toml().contains(key),
-                "{key}: the flap's, the glide's and the clock's keys at their defaults too"
+                "{key}: the flap's, the glide's, the clock's and the feathering's keys at their defaults too"
             );
         }
         let glide = "[task.reward]\nglide_hold_weight = 0.3\nglide_hold_scale_deg = 15\nflap_rate_weight = 0.1\n\
-                     [task.observation]\nclock_hz = 5.3\n";
+                     feathering_weight = 0.2\n[task.observation]\nclock_hz = 5.3\n\
+                     [task.control]\npassive_feathering_s = 0.03\n";
         let glide = TrainConfig::from_toml(glide, "g.toml", None).unwrap();
         assert_eq!((glide.task.reward.glide_hold_weight, glide.task.reward.glide_hold_scale_deg), (0.3, 15.0));
         assert_eq!(glide.task.observation.clock_hz, 5.3);
+        assert_eq!((glide.task.reward.feathering_weight, glide.task.control.passive_feathering_s), (0.2, 0.03));
         assert_eq!(TrainConfig::from_toml(&glide.to_toml(), "g2.toml", None).unwrap(), glide);
         let euclidean = TrainConfig::from_toml("[ppo]\nsmoothness_norm = \"euclidean\"\n", "e.toml", None).unwrap();
         assert_eq!(euclidean.ppo.smoothness_norm, flapper_ppo::config::SmoothnessNorm::Euclidean);
