@@ -191,7 +191,7 @@ pub struct RobustnessArgs {
     pub sweeps: Vec<String>,
     /// Randomization ranges r of the fluid sweep (comma-separated; coefficients x[1 - r, 1 + r]).
     /// Default: the paper's 0, 0.1, 0.2, 0.3, 0.4, 0.5.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub ranges: Option<Vec<f64>>,
     /// Output folder (created if needed).
     #[arg(long, default_value = "run/robustness")]

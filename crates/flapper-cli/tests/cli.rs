@@ -372,6 +372,7 @@ fn a_negative_number_is_refused_naming_its_flag() {
         (&["sysid", "--policy", p, "--out", o], &["--seed", "--amplitude-m", "--input-lead-s", "--averaged-periods"]),
         (&["phase", "--policy", p, "--out", o], &["--speed-mps"]),
         (&["frontier", "--policy", p, "--out", o], &["--episodes", "--seed"]),
+        (&["power-curve", "--out", o], &["--episodes", "--seed", "--speeds", "--frequencies", "--pitch-amplitudes"]),
     ];
     for (command, flags) in flags {
         for flag in *flags {
@@ -505,6 +506,7 @@ fn robustness_writes_the_sweeps_tables_and_rejects_bad_input() {
         (&["--sweeps", "fluid,gusts"][..], "gusts"),
         (&["--ranges", "0,1.5"][..], "1.5"),
         (&["--ranges", "NaN"][..], "NaN"),
+        (&["--ranges", "-0.1,0.2"][..], "got -0.1"),
         (&["--reference", "no-such-manoeuvre"][..], "no-such-manoeuvre"),
     ] {
         let base = ["robustness", "--policy", &policy, "--episodes", "1", "--out", o];
