@@ -1,7 +1,9 @@
 //! The flap's rhythm as the robot flies it: the frequency of the left flap joint, read online from the
 //! times of its tops (the maxima of its angle), for the reward's price on a fast stroke
 //! (`reward.flap_rate_weight`); and its swing, the peak-to-peak range over the last
-//! [`FLAP_SWING_WINDOW_STEPS`], for the reward's pay for a held wing (`reward.glide_hold_weight`).
+//! [`FLAP_SWING_WINDOW_STEPS`], for the reward's pay for a held wing (`reward.glide_hold_weight`); and its
+//! feathering, the wings' pitch against their flap rate over the same window ([`StrokeFeathering`]), for
+//! the reward's pay for a pitch ahead of the flap (`reward.feathering_weight`).
 //!
 //! A top counts once the angle has fallen [`HELD_FLAP_RANGE_DEG`] below it after rising as much from the
 //! bottom before it: a wing that moves less than that, peak to peak, is held (gliding) by the same
