@@ -179,8 +179,8 @@ pub fn cheapest_by_speed(flights: &[GaitFlight]) -> Vec<CheapestGait> {
 /// The cheapest level energy per metre at `speed_mps`, interpolated between the neighbouring bins'
 /// cheapest flights (by their own speeds); `None` outside the speeds the level gaits reached.
 pub fn cheapest_energy_at(cheapest: &[CheapestGait], speed_mps: f64) -> Option<f64> {
-    let points: Vec<(f64, f64)> = cheapest.iter().map(|c| (c.flight.speed_mps, c.flight.energy_per_metre_j)).collect();
-    let mut sorted = points;
+    let mut sorted: Vec<(f64, f64)> =
+        cheapest.iter().map(|c| (c.flight.speed_mps, c.flight.energy_per_metre_j)).collect();
     sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
     sorted.windows(2).find(|w| w[0].0 <= speed_mps && speed_mps <= w[1].0).map(|w| {
         let (x0, y0, x1, y1) = (w[0].0, w[0].1, w[1].0, w[1].1);
@@ -276,11 +276,16 @@ pub struct PowerCurveSettings {
 /// The gaits are flown in this many batches, a progress call after each.
 const GAIT_BATCHES: usize = 20;
 
+/// How many gaits one batch flies, for `gaits` in all.
+fn gait_batch_size(gaits: usize) -> usize {
+    gaits.div_ceil(GAIT_BATCHES).max(1)
+}
+
 /// How many times [`measure_power_curve`] calls its progress callback: once per batch of gaits, once
 /// per policy and speed.
 pub fn step_count(settings: &PowerCurveSettings, policies: usize) -> usize {
     let gaits = settings.family.gaits().len();
-    gaits.div_ceil(gaits.div_ceil(GAIT_BATCHES).max(1)) + policies * settings.policy_speeds_mps.len()
+    gaits.div_ceil(gait_batch_size(gaits)) + policies * settings.policy_speeds_mps.len()
 }
 
 /// Flies the gait family, then each policy at each speed; `progress` is called after each step.
@@ -293,7 +298,7 @@ pub fn measure_power_curve(
     use rayon::prelude::*;
     let gaits = settings.family.gaits();
     let mut flights = Vec::with_capacity(gaits.len());
-    for batch in gaits.chunks(gaits.len().div_ceil(GAIT_BATCHES).max(1)) {
+    for batch in gaits.chunks(gait_batch_size(gaits.len())) {
         flights.extend(batch.par_iter().map(|g| fly_gait(robot, g)).collect::<Result<Vec<_>, _>>()?);
         let level = flights.iter().filter(|f| f.level()).count();
         progress(&format!("{} of {} gaits flown, {level} level", flights.len(), gaits.len()));

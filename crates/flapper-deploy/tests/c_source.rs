@@ -103,39 +103,34 @@ fn the_export_refuses_an_existing_file_and_a_name_without_c() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-#[test]
-fn the_export_refuses_a_policy_that_reads_a_clock() {
+/// The stage-1 policy saved as `file` in a scratch folder with `[task.SECTION] KEY = value` set in its
+/// config (`appended_inputs` more zero-weighted inputs), and what `DeployablePolicy::load` says of it.
+fn refusal_of(file: &str, section: &str, key: &str, value: f64, appended_inputs: usize) -> String {
     use flapper_ppo::checkpoint;
     let robot = RobotModel::flapper().unwrap();
     let source = checkpoint::load(&shipped("policies/history/stage1/policy.safetensors")).unwrap();
     let mut config: toml::Table = source.info.config_toml.parse().unwrap();
     let task = config.entry("task").or_insert(toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
-    let observation = task.entry("observation").or_insert(toml::Value::Table(toml::Table::new()));
-    observation.as_table_mut().unwrap().insert("clock_hz".into(), toml::Value::Float(5.3));
-    let clocked = source.with_inputs_appended(2);
-    let info = checkpoint::CheckpointInfo { config_toml: toml::to_string(&config).unwrap(), ..clocked.info.clone() };
-    let dir = scratch("clock");
-    let path = dir.join("clocked.safetensors");
-    checkpoint::save(&path, &info, &clocked.policy, None, None).unwrap();
-    let error = DeployablePolicy::load(&path, &robot).expect_err("a clock policy is refused").to_string();
-    assert!(error.contains("clocked.safetensors") && error.contains("5.3 Hz clock"), "{error}");
+    let table = task.entry(section).or_insert(toml::Value::Table(toml::Table::new()));
+    table.as_table_mut().unwrap().insert(key.into(), toml::Value::Float(value));
+    let edited = source.with_inputs_appended(appended_inputs);
+    let info = checkpoint::CheckpointInfo { config_toml: toml::to_string(&config).unwrap(), ..edited.info.clone() };
+    let dir = scratch(key);
+    let path = dir.join(file);
+    checkpoint::save(&path, &info, &edited.policy, None, None).unwrap();
+    let error = DeployablePolicy::load(&path, &robot).expect_err("the export refuses it").to_string();
     let _ = std::fs::remove_dir_all(&dir);
+    error
+}
+
+#[test]
+fn the_export_refuses_a_policy_that_reads_a_clock() {
+    let error = refusal_of("clocked.safetensors", "observation", "clock_hz", 5.3, 2);
+    assert!(error.contains("clocked.safetensors") && error.contains("5.3 Hz clock"), "{error}");
 }
 
 #[test]
 fn the_export_refuses_a_policy_trained_with_passive_feathering() {
-    use flapper_ppo::checkpoint;
-    let robot = RobotModel::flapper().unwrap();
-    let source = checkpoint::load(&shipped("policies/history/stage1/policy.safetensors")).unwrap();
-    let mut config: toml::Table = source.info.config_toml.parse().unwrap();
-    let task = config.entry("task").or_insert(toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
-    let control = task.entry("control").or_insert(toml::Value::Table(toml::Table::new()));
-    control.as_table_mut().unwrap().insert("passive_feathering_s".into(), toml::Value::Float(0.03));
-    let info = checkpoint::CheckpointInfo { config_toml: toml::to_string(&config).unwrap(), ..source.info.clone() };
-    let dir = scratch("feathering");
-    let path = dir.join("feathered.safetensors");
-    checkpoint::save(&path, &info, &source.policy, None, None).unwrap();
-    let error = DeployablePolicy::load(&path, &robot).expect_err("a feathered policy is refused").to_string();
+    let error = refusal_of("feathered.safetensors", "control", "passive_feathering_s", 0.03, 0);
     assert!(error.contains("feathered.safetensors") && error.contains("passive_feathering_s = 0.03"), "{error}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

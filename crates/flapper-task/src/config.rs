@@ -85,11 +85,12 @@ pub struct ControlConfig {
     /// under its stroke would, so that the pitch leads the flap by a quarter period (the scripted gait's
     /// shape) whatever the policy asks (docs/experiments.md, "The learned stroke feathers backwards").
     /// A policy trained with it needs it on the robot: `flapper export-policy` refuses one.
-    #[serde(skip_serializing_if = "is_zero_seconds")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub passive_feathering_s: f64,
 }
 
-fn is_zero_seconds(value: &f64) -> bool {
+/// An experimental key that is off at 0, left out of a written config there.
+fn is_zero(value: &f64) -> bool {
     *value == 0.0
 }
 
@@ -186,7 +187,7 @@ pub struct RewardConfig {
     /// held wing is paid). At 5.3 m/s the scripted gait's family flies level on 14 W with the pitch
     /// leading by 90 deg and needs 23-25 W with it lagging by 75 deg, the trained controllers' phase
     /// (docs/experiments.md, "The learned stroke feathers backwards").
-    #[serde(skip_serializing_if = "is_zero_weight")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub feathering_weight: f64,
     /// The flap's swing (deg, peak to peak over the last 0.4 s) at which r_glide_hold falls to 1/e of its
     /// top: by default the range under which `flapper modes` counts the wing as held.
@@ -274,10 +275,6 @@ fn is_default_flap_rate_scale_hz(value: &f64) -> bool {
 
 fn is_default_flap_rate_glide_share(value: &f64) -> bool {
     *value == RewardConfig::default().flap_rate_glide_share
-}
-
-fn is_zero_weight(value: &f64) -> bool {
-    *value == 0.0
 }
 
 fn is_default_glide_hold_weight(value: &f64) -> bool {
