@@ -89,6 +89,12 @@ fn header(arrays: &PolicyArrays, facts: &DeploymentFacts, stem: &str) -> String 
         facts.control_period_s,
         facts.control_rate_hz
     );
+    if facts.passive_feathering_s > 0.0 {
+        let _ = writeln!(
+            h,
+            "/* Passive feathering: before the filter, each wing's pitch target (q2, q4) plus\n * FLAPPER_POLICY_PASSIVE_FEATHERING_S x its own flap's rate (q1, q3, rad/s, read this control step),\n * clipped to +-its half range; the twisted target, over its half range, is next step's previous action. */\n"
+        );
+    }
     let defines = [
         ("OBSERVATION_SIZE", n.to_string()),
         ("ACTION_SIZE", a.to_string()),
@@ -102,6 +108,7 @@ fn header(arrays: &PolicyArrays, facts: &DeploymentFacts, stem: &str) -> String 
             "ACTION_HALF_RANGE_RAD",
             format!("{{ {} }}", facts.action_half_range_rad.map(|v| format!("{v:?}")).join(", ")),
         ),
+        ("PASSIVE_FEATHERING_S", format!("{:?}", facts.passive_feathering_s)),
     ];
     for (name, value) in defines {
         let _ = writeln!(h, "#define FLAPPER_POLICY_{name} {value}");

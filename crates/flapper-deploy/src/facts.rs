@@ -41,6 +41,11 @@ pub struct DeploymentFacts {
     pub joint_ranges_rad: [[f64; 2]; N_ACTUATED_JOINTS],
     /// The joint target (rad) an action of +1 asks for (`action_scale` x the joint's limit).
     pub action_half_range_rad: [f64; N_ACTUATED_JOINTS],
+    /// Passive feathering (s; `[task.control] passive_feathering_s`, 0 for a policy trained without it):
+    /// each wing's pitch target (q2, q4) plus this times its own flap's rate (q1, q3, rad/s, read when the
+    /// action is computed), clipped to the pitch's half range. The twisted target is next step's previous
+    /// action.
+    pub passive_feathering_s: f64,
     /// The policy's rate: one action per control period.
     pub control_rate_hz: f64,
     pub control_period_s: f64,
@@ -70,12 +75,6 @@ impl DeploymentFacts {
         if layout.clock {
             return Err(DeployError::Clock { path: path.to_owned(), clock_hz: task.observation.clock_hz });
         }
-        if task.control.passive_feathering_s > 0.0 {
-            return Err(DeployError::PassiveFeathering {
-                path: path.to_owned(),
-                feathering_s: task.control.passive_feathering_s,
-            });
-        }
         let sim = robot.instantiate()?;
         let control_period_s = task.control_period_s(robot.timestep_s());
         let actions = ActionMap::new(&sim, &task.control, control_period_s);
@@ -100,6 +99,7 @@ impl DeploymentFacts {
             joint_names: ActuatedJoint::ALL.map(ActuatedJoint::name),
             joint_ranges_rad: sim.joint_ranges(),
             action_half_range_rad: actions.half_range_rad(),
+            passive_feathering_s: task.control.passive_feathering_s,
             control_rate_hz: 1.0 / control_period_s,
             control_period_s,
             servo_rate_hz: 1.0 / robot.timestep_s(),

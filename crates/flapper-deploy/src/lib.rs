@@ -44,10 +44,6 @@ pub enum DeployError {
          export a policy trained without it"
     )]
     Clock { path: PathBuf, clock_hz: f64 },
-    #[error(
-        "'{path}' was trained with passive feathering ([task.control] passive_feathering_s = {feathering_s}): its wing pitch targets need each wing's flap rate added, which an export does not do; export a policy trained without it"
-    )]
-    PassiveFeathering { path: PathBuf, feathering_s: f64 },
 }
 
 /// One dense layer of the actor: `out = weight x in + bias`, `weight` row-major [fan_out x fan_in]

@@ -104,8 +104,15 @@ fn the_export_refuses_an_existing_file_and_a_name_without_c() {
 }
 
 /// The stage-1 policy saved as `file` in a scratch folder with `[task.SECTION] KEY = value` set in its
-/// config (`appended_inputs` more zero-weighted inputs), and what `DeployablePolicy::load` says of it.
-fn refusal_of(file: &str, section: &str, key: &str, value: f64, appended_inputs: usize) -> String {
+/// config (`appended_inputs` more zero-weighted inputs), and what `DeployablePolicy::load` makes of it
+/// (with the C header it writes, when it exports).
+fn export_of(
+    file: &str,
+    section: &str,
+    key: &str,
+    value: f64,
+    appended_inputs: usize,
+) -> Result<(DeployablePolicy, String), String> {
     use flapper_ppo::checkpoint;
     let robot = RobotModel::flapper().unwrap();
     let source = checkpoint::load(&shipped("policies/history/stage1/policy.safetensors")).unwrap();
@@ -118,19 +125,33 @@ fn refusal_of(file: &str, section: &str, key: &str, value: f64, appended_inputs:
     let dir = scratch(key);
     let path = dir.join(file);
     checkpoint::save(&path, &info, &edited.policy, None, None).unwrap();
-    let error = DeployablePolicy::load(&path, &robot).expect_err("the export refuses it").to_string();
+    let exported = DeployablePolicy::load(&path, &robot).map_err(|e| e.to_string()).map(|deployable| {
+        let header = write_c_source(&deployable, &dir.join("policy.c")).unwrap();
+        let text = std::fs::read_to_string(header).unwrap();
+        (deployable, text)
+    });
     let _ = std::fs::remove_dir_all(&dir);
-    error
+    exported
 }
 
 #[test]
 fn the_export_refuses_a_policy_that_reads_a_clock() {
-    let error = refusal_of("clocked.safetensors", "observation", "clock_hz", 5.3, 2);
+    let error = export_of("clocked.safetensors", "observation", "clock_hz", 5.3, 2).expect_err("the export refuses it");
     assert!(error.contains("clocked.safetensors") && error.contains("5.3 Hz clock"), "{error}");
 }
 
 #[test]
-fn the_export_refuses_a_policy_trained_with_passive_feathering() {
-    let error = refusal_of("feathered.safetensors", "control", "passive_feathering_s", 0.03, 0);
-    assert!(error.contains("feathered.safetensors") && error.contains("passive_feathering_s = 0.03"), "{error}");
+fn passive_feathering_travels_as_a_fact_of_the_export() {
+    let (feathered, header) = export_of("feathered.safetensors", "control", "passive_feathering_s", 0.03, 0).unwrap();
+    assert_eq!(feathered.facts.passive_feathering_s, 0.03);
+    assert!(feathered.facts.metadata().contains(&("passive_feathering_s".into(), "0.03".into())));
+    assert!(header.contains("#define FLAPPER_POLICY_PASSIVE_FEATHERING_S 0.03"), "{header}");
+    assert!(header.contains("Passive feathering: before the filter"), "{header}");
+
+    // Without it the fact reads 0 and the header says nothing of a twist.
+    let (plain, header) = export_of("plain.safetensors", "control", "passive_feathering_s", 0.0, 0).unwrap();
+    assert_eq!(plain.facts.passive_feathering_s, 0.0);
+    assert!(
+        header.contains("#define FLAPPER_POLICY_PASSIVE_FEATHERING_S 0.0") && !header.contains("Passive feathering")
+    );
 }

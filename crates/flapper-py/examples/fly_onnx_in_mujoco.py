@@ -53,6 +53,8 @@ class OnnxPolicy:
         self.observation_names = json.loads(meta["observation_names"])
         self.joint_names = json.loads(meta["joint_names"])
         self.half_range_rad = json.loads(meta["action_half_range_rad"])
+        # Passive feathering (s): each wing's pitch target plus this times its own flap's rate; 0 for most policies.
+        self.passive_feathering_s = float(meta.get("passive_feathering_s", 0.0))
         self.substeps = int(meta["substeps_per_control_step"])
         self.servo_rate_hz = float(meta["servo_rate_hz"])
         self.filter_cutoff_hz = float(meta["filter_cutoff_hz"])
@@ -160,6 +162,9 @@ class Robot:
         values += [d.qpos[a] for a in self.joint_qpos] + [airspeed]
         return np.array(values + list(previous_action), dtype=np.float64).astype(np.float32)
 
+    def joint_velocities(self):
+        return [self.data.qvel[a] for a in self.joint_dof]
+
     def apply(self, targets_rad):
         """One control period: the joint targets through the filter into the PD servos, one MuJoCo step each."""
         for _ in range(self.policy.substeps):
@@ -209,6 +214,12 @@ def fly(policy, robot, reference, start, steps, recorded_actions=None):
         # Actions -> joint targets (rad): clipped to [-1, 1], a non-finite one counts as 0.
         clipped = [min(max(float(a), -1.0), 1.0) if math.isfinite(a) else 0.0 for a in action]
         targets = [a * h for a, h in zip(clipped, policy.half_range_rad)]
+        if policy.passive_feathering_s > 0.0:
+            # Each wing's pitch (q2, q4) twists with its own flap's rate (q1, q3) as read this step.
+            rates = robot.joint_velocities()
+            for flap, pitch in ((0, 1), (2, 3)):
+                h = policy.half_range_rad[pitch]
+                targets[pitch] = min(max(targets[pitch] + policy.passive_feathering_s * rates[flap], -h), h)
         robot.apply(targets)
         previous = [np.float32(min(max(t / h, -1.0), 1.0)) for t, h in zip(targets, policy.half_range_rad)]
         errors.append(distance(target(step + 1), robot.position()))
