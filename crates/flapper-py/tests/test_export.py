@@ -137,3 +137,38 @@ def test_the_worked_example_flies_the_onnx_policy_in_stock_mujoco_as_flapper_eva
     flown, flappers = example.rms(errors), example.rms(eval_errors[:steps])
     print(f"worked example, 4 s of longitudinal: RMS {flown:.4f} m with onnxruntime, flapper eval {flappers:.4f} m")
     assert abs(flown - flappers) < 0.05 and max(errors) < 1.0
+
+
+def test_the_worked_example_twists_the_wings_of_a_feathered_policy_as_flapper_does(tmp_path):
+    """A policy trained with passive feathering (here one PPO iteration of the final controller with k = 0.02 s)
+    exports its twist as a fact; the worked example applies it, so with flapper eval's recorded actions its
+    observations are flapper's to the bit, and without the twist they are not."""
+    config = tmp_path / "feathered.toml"
+    config.write_text("[task]\nstage = 4\n[task.control]\npassive_feathering_s = 0.02\n")
+    run = tmp_path / "run"
+    cargo_run("flapper-cli", [], ["train", "--config", config, "--init-from", FINAL, "--iterations", 1, "--envs", 8, "--out", run])
+    feathered = run / "policy.safetensors"
+    cargo_run("flapper-cli", [], ["reference", "longitudinal", "--out", tmp_path / "reference"])
+    reference_csv = tmp_path / "reference" / "reference.csv"
+    cargo_run("flapper-cli", [], ["eval", "--policy", feathered, "--reference", reference_csv, "--episodes", 1, "--seed", 11,
+                                  "--no-baseline", "--observations", "--out", tmp_path / "eval"])
+    onnx_path = tmp_path / "policy.onnx"
+    flapper.Policy.load(str(feathered)).export_onnx(str(onnx_path))
+
+    example = load_example()
+    policy = example.OnnxPolicy(onnx_path)
+    assert policy.passive_feathering_s == 0.02, "the twist travels in the metadata"
+    robot = example.Robot(ROOT / "models/flapper.xml", policy)
+    reference = example.load_reference(reference_csv, robot.control_period_s)
+    start, eval_observations, eval_actions, _ = example.read_eval(tmp_path / "eval" / "policy", 540)
+    steps = 200
+
+    def flown():
+        observations, _, _ = example.fly(policy, robot, reference, start, steps, recorded_actions=eval_actions)
+        same = [np.array_equal(o.view(np.uint32), e.view(np.uint32)) for o, e in zip(observations, eval_observations)]
+        return len(observations), (same.index(False) if False in same else None)
+
+    assert flown() == (steps, None), "the twisted wings fly flapper's flight to the bit"
+    policy.passive_feathering_s = 0.0
+    _, first_difference = flown()
+    assert first_difference is not None and first_difference < 10, "without the twist the flight is another one"
