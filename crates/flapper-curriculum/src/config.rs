@@ -867,6 +867,16 @@ task = { stage = 2 }
         assert_eq!(required_sixth.extension_iterations(4, 3103 * 6144, 1000).unwrap(), 0);
         let unreserved = StageConfig { reserved_iterations: None, ..reserving.stages[5].clone() };
         assert_eq!(unreserved.as_trained(), reserving.stages[5].as_trained(), "what it trains is the same");
+        // The light twist's sixth stage (300 iterations reserved) leaves seed 1's stage 5 its 600-iteration
+        // extension, so its first five stages train the shipped bits and the run stays within the 30 M.
+        let light = shipped("experiments/curriculum-light-feathering-stage.toml");
+        assert!(light.stages[..5] == five.stages[..] && light.max_env_steps == five.max_env_steps);
+        assert_eq!(light.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600);
+        assert_eq!(light.stage_iterations(6, seed1_before_stage5 + 1800 * 6144).unwrap(), 300);
+        let twisted = light.stage_train_config(6).unwrap();
+        assert_eq!(twisted.task.control.passive_feathering_s, 0.01);
+        assert_eq!(twisted.task.reference.loop_probability, 0.6);
+        assert_eq!(twisted.ppo, light.stage_train_config(5).unwrap().ppo, "stage 5's learner settings");
 
         let oscillator = shipped("experiments/curriculum-oscillator.toml");
         assert_eq!(task_stages(&oscillator), [1, 2, 3, 3, 4]);
