@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flapper_curriculum::run::describe_gate;
-use flapper_curriculum::selection::StageOutcome;
+use flapper_curriculum::selection::{StageOutcome, StoppedStage};
 use flapper_curriculum::summary::Summary;
 use flapper_curriculum::{CurriculumConfig, CurriculumError, CurriculumRequest, Progress, run_curriculum};
 
@@ -138,10 +138,7 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
     println!(
         "done: {} stages handed over a controller{}, {:.2} M environment steps, {:.0} s",
         outcomes.len(),
-        summary
-            .optional_stage_missed
-            .as_ref()
-            .map_or(String::new(), |m| format!(" (stage {} missed its gate)", m.stage)),
+        summary.optional_stage_missed.as_ref().map_or(String::new(), optional_stage_note),
         summary.total_env_steps as f64 / 1e6,
         summary.total_wall_time_s
     );
@@ -149,6 +146,16 @@ pub fn run(args: CurriculumArgs, model: Option<&Path>) -> Result<()> {
         println!("wrote {}", args.out.join(file).display());
     }
     Ok(())
+}
+
+/// The final line's note on an optional last stage the run ended without: it trained and missed its gate,
+/// or the budget left it no iteration to train (`iterations` 0; the reason is in `stopped_because`).
+fn optional_stage_note(missed: &StoppedStage) -> String {
+    if missed.iterations == 0 {
+        format!(" (stage {} could not start: the environment-step budget was spent before it)", missed.stage)
+    } else {
+        format!(" (stage {} missed its gate)", missed.stage)
+    }
 }
 
 /// What a robot of one's own whose run from scratch stopped at a gate can do next: the shipped controller
@@ -288,6 +295,30 @@ fn report_progress(event: Progress) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An optional stage that trained and missed its gate, and one the budget never let start, are told
+    /// apart on the final line.
+    #[test]
+    fn the_final_line_says_whether_the_optional_stage_trained_or_could_not_start() {
+        let mut missed = StoppedStage {
+            stage: 6,
+            name: "light feathering".into(),
+            gate: "every validation reference completed".into(),
+            iterations: 300,
+            env_steps: 1_843_200,
+            wall_time_s: 250.0,
+            best_iteration: Some(100),
+            best_validation_score: Some(97.0),
+            best_validation_rms_m: Some(0.43),
+            cpu: None,
+            extensions: Vec::new(),
+            stopped_because: None,
+        };
+        assert_eq!(optional_stage_note(&missed), " (stage 6 missed its gate)");
+        missed.iterations = 0;
+        missed.env_steps = 0;
+        assert!(optional_stage_note(&missed).contains("stage 6 could not start"), "{}", optional_stage_note(&missed));
+    }
 
     fn repository(file: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(file)
