@@ -242,7 +242,10 @@ fn report_progress(event: Progress) {
                 .score
                 .references
                 .iter()
-                .map(|r| format!("{} {}/{} {:.2} m", r.name, r.completed, r.episodes, r.mean_rms_m))
+                .map(|r| {
+                    let energy = r.energy_ratio.map_or(String::new(), |ratio| format!(" {ratio:.2} x"));
+                    format!("{} {}/{} {:.2} m{energy}", r.name, r.completed, r.episodes, r.mean_rms_m)
+                })
                 .collect();
             let glide = match row.modes {
                 Some(f) => format!(

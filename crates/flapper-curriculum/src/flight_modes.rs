@@ -26,7 +26,7 @@ use flapper_sim::{ActuatedJoint, RobotModel};
 use flapper_task::TaskConfig;
 
 use crate::config::{CruiseFlapFlight, Gate};
-use crate::validation::ValidationError;
+use crate::validation::{Score, ValidationError};
 
 /// What one flight along the longitudinal reference says of a checkpoint's flight modes; NaN where the
 /// checkpoint does not fly the reference to its end.
@@ -96,57 +96,112 @@ fn cruise_reference_flap_hz(
 
 /// Whether the gate has any flight-mode bar (then every validation measures [`ModeFigures`]).
 pub fn gate_asks_flight_modes(gate: &Gate) -> bool {
-    gate.glide_fraction.is_some() || gate.max_energy_ratio.is_some() || gate.cruise_flap_hz.is_some()
+    gate.glide_fraction.is_some()
+        || gate.max_energy_ratio.is_some()
+        || gate.cruise_flap_hz.is_some()
+        || !gate.reference_max_energy_ratio.is_empty()
 }
 
-/// Whether measured figures meet the gate's flight-mode bars; a checkpoint not measured (`None`) or
-/// that did not fly the reference (NaN) meets none.
-pub fn meets_flight_mode_bars(gate: &Gate, figures: Option<&ModeFigures>) -> bool {
+/// Whether measured figures, and the validation's energy ratios in `score`, meet the gate's flight-mode
+/// bars; a checkpoint not measured (`None`) or that did not fly the reference (NaN) meets none.
+pub fn meets_flight_mode_bars(gate: &Gate, figures: Option<&ModeFigures>, score: &Score) -> bool {
     if !gate_asks_flight_modes(gate) {
         return true;
     }
     let Some(f) = figures else { return false };
-    flight_mode_verdicts(gate, f).into_iter().all(|met| met != Some(false))
+    flight_mode_verdicts(gate, f, score).all(|met| met != Some(false))
 }
 
-/// How many of the gate's flight-mode bars `figures` meets (none where unmeasured).
-pub fn flight_mode_bars_met(gate: &Gate, figures: Option<&ModeFigures>) -> usize {
-    figures.map_or(0, |f| flight_mode_verdicts(gate, f).into_iter().filter(|&met| met == Some(true)).count())
+/// How many of the gate's flight-mode bars are met (none where unmeasured).
+pub fn flight_mode_bars_met(gate: &Gate, figures: Option<&ModeFigures>, score: &Score) -> usize {
+    figures.map_or(0, |f| flight_mode_verdicts(gate, f, score).filter(|&met| met == Some(true)).count())
 }
 
-/// Each flight-mode bar, met or not (`None`: the gate does not ask it): the glide, the energy, the flap frequency.
-fn flight_mode_verdicts(gate: &Gate, f: &ModeFigures) -> [Option<bool>; 3] {
-    [
+/// Each flight-mode bar, met or not (`None`: the gate does not ask it): the glide, the energy, the flap
+/// frequency, then each priced validation entry's energy ratio (an entry without one meets no bar).
+fn flight_mode_verdicts<'a>(
+    gate: &'a Gate,
+    f: &ModeFigures,
+    score: &'a Score,
+) -> impl Iterator<Item = Option<bool>> + 'a {
+    let flight = [
         gate.glide_fraction.map(|bar| f.glide_fraction >= bar),
         gate.max_energy_ratio.map(|bar| f.energy_ratio <= bar),
         gate.cruise_flap_hz.map(|[low, high]| (low..=high).contains(&f.cruise_flap_hz)),
-    ]
+    ];
+    let entries = gate
+        .reference_max_energy_ratio
+        .iter()
+        .map(|(name, bar)| Some(score.reference(name).and_then(|r| r.energy_ratio).is_some_and(|ratio| ratio <= *bar)));
+    flight.into_iter().chain(entries)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::validation::ReferenceScore;
 
     fn figures(glide_fraction: f64, energy_ratio: f64, cruise_flap_hz: f64) -> Option<ModeFigures> {
         Some(ModeFigures { glide_fraction, energy_ratio, cruise_flap_hz })
     }
 
+    /// A validation score with these entries' energy ratios (`None`: not priced).
+    fn flown(entries: &[(&str, Option<f64>)]) -> Score {
+        let references = entries
+            .iter()
+            .map(|&(name, energy_ratio)| ReferenceScore {
+                name: name.into(),
+                completed: 50,
+                episodes: 50,
+                mean_rms_m: 0.2,
+                energy_ratio,
+            })
+            .collect();
+        Score { completed_percent: 100.0, mean_rms_m: 0.2, references }
+    }
+
     #[test]
     fn each_bar_must_be_met_and_a_failed_or_unmeasured_flight_meets_none() {
+        let unpriced = flown(&[("longitudinal", None)]);
         let glide = Gate { glide_fraction: Some(0.5), ..Gate::completing(0.0) };
-        assert!(meets_flight_mode_bars(&glide, figures(0.5, 9.0, 7.0).as_ref()));
-        assert!(meets_flight_mode_bars(&glide, figures(0.74, 1.0, 5.0).as_ref()));
-        assert!(!meets_flight_mode_bars(&glide, figures(0.49, 1.0, 5.0).as_ref()));
-        assert!(!meets_flight_mode_bars(&glide, Some(&ModeFigures::NOT_FLOWN)), "the reference not flown to its end");
-        assert!(!meets_flight_mode_bars(&glide, None), "not measured");
+        assert!(meets_flight_mode_bars(&glide, figures(0.5, 9.0, 7.0).as_ref(), &unpriced));
+        assert!(meets_flight_mode_bars(&glide, figures(0.74, 1.0, 5.0).as_ref(), &unpriced));
+        assert!(!meets_flight_mode_bars(&glide, figures(0.49, 1.0, 5.0).as_ref(), &unpriced));
+        assert!(
+            !meets_flight_mode_bars(&glide, Some(&ModeFigures::NOT_FLOWN), &unpriced),
+            "the reference not flown to its end"
+        );
+        assert!(!meets_flight_mode_bars(&glide, None, &unpriced), "not measured");
         let energy = Gate { max_energy_ratio: Some(1.5), ..Gate::completing(0.0) };
-        assert!(meets_flight_mode_bars(&energy, figures(0.0, 1.5, 7.0).as_ref()));
-        assert!(!meets_flight_mode_bars(&energy, figures(0.9, 1.51, 5.3).as_ref()));
+        assert!(meets_flight_mode_bars(&energy, figures(0.0, 1.5, 7.0).as_ref(), &unpriced));
+        assert!(!meets_flight_mode_bars(&energy, figures(0.9, 1.51, 5.3).as_ref(), &unpriced));
         let frequency = Gate { cruise_flap_hz: Some([4.0, 6.0]), ..Gate::completing(0.0) };
-        assert!(meets_flight_mode_bars(&frequency, figures(0.0, 9.0, 5.3).as_ref()));
-        assert!(!meets_flight_mode_bars(&frequency, figures(0.9, 1.0, 6.32).as_ref()));
-        assert!(!meets_flight_mode_bars(&frequency, figures(0.9, 1.0, 3.9).as_ref()));
+        assert!(meets_flight_mode_bars(&frequency, figures(0.0, 9.0, 5.3).as_ref(), &unpriced));
+        assert!(!meets_flight_mode_bars(&frequency, figures(0.9, 1.0, 6.32).as_ref(), &unpriced));
+        assert!(!meets_flight_mode_bars(&frequency, figures(0.9, 1.0, 3.9).as_ref(), &unpriced));
         let none = Gate::completing(0.0);
-        assert!(meets_flight_mode_bars(&none, None), "a gate without flight-mode bars asks nothing");
+        assert!(meets_flight_mode_bars(&none, None, &unpriced), "a gate without flight-mode bars asks nothing");
+    }
+
+    #[test]
+    fn each_priced_entry_must_be_within_its_energy_bar_and_counts_as_one_bar() {
+        let gate = Gate {
+            reference_max_energy_ratio: [("longitudinal".to_owned(), 1.5), ("immelmann".to_owned(), 3.0)].into(),
+            cruise_flap_hz: Some([4.0, 6.0]),
+            ..Gate::completing(0.0)
+        };
+        assert!(gate_asks_flight_modes(&gate));
+        let at_5hz = figures(0.0, 9.0, 5.0);
+        let cheap = flown(&[("longitudinal", Some(1.5)), ("immelmann", Some(2.9))]);
+        assert!(meets_flight_mode_bars(&gate, at_5hz.as_ref(), &cheap), "each at or under its bar");
+        assert_eq!(flight_mode_bars_met(&gate, at_5hz.as_ref(), &cheap), 3);
+        let costly_immelmann = flown(&[("longitudinal", Some(1.4)), ("immelmann", Some(3.11))]);
+        assert!(!meets_flight_mode_bars(&gate, at_5hz.as_ref(), &costly_immelmann), "3.11 x over its 3 x");
+        assert_eq!(flight_mode_bars_met(&gate, at_5hz.as_ref(), &costly_immelmann), 2);
+        let unpriced = flown(&[("longitudinal", Some(1.4)), ("immelmann", None)]);
+        assert!(!meets_flight_mode_bars(&gate, at_5hz.as_ref(), &unpriced), "an entry without a ratio meets no bar");
+        let scripted_flew_nothing = flown(&[("longitudinal", Some(1.4)), ("immelmann", Some(f64::NAN))]);
+        assert!(!meets_flight_mode_bars(&gate, at_5hz.as_ref(), &scripted_flew_nothing), "NaN meets no bar");
+        assert!(!meets_flight_mode_bars(&gate, None, &cheap), "not measured");
     }
 }

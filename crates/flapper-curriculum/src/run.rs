@@ -336,12 +336,10 @@ fn run_stage(
     let mut extensions = read_extensions(&here)?;
     let mut iterations = iterations + extensions.iter().map(|e| e.added_iterations).sum::<usize>();
     train_config.runner.iterations = iterations;
-    let set = Arc::new(ValidationSet::new(
-        &stage.validation,
-        &train_config.task,
-        robot.timestep_s(),
-        config.validation_seed(number),
-    )?);
+    let set = Arc::new(
+        ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?
+            .price_energy(robot, stage.gate.reference_max_energy_ratio.keys())?,
+    );
     let names = set.names();
     let selection_path = here.join("selection.csv");
     let mut selection = Selection::read(&selection_path, &names, GateColumns::of(&stage.gate))?;
@@ -623,7 +621,8 @@ fn choose_at_the_end<'a>(stage: &'a StageConfig, selection: &'a Selection) -> Op
     let gate = &stage.gate;
     let identification_met = gate.identification_fit_percent.map(|_| false);
     let flight_modes_met = |best: &Validated| {
-        (gate_asks_flight_modes(gate) && !meets_flight_mode_bars(gate, best.modes.as_ref())).then_some(false)
+        (gate_asks_flight_modes(gate) && !meets_flight_mode_bars(gate, best.modes.as_ref(), &best.score))
+            .then_some(false)
     };
     let tracking = selection.most_efficient_tracking(gate).or_else(|| selection.most_efficient_tracking_from(gate, 0));
     let tracking = tracking.map(|best| HandOver {
@@ -900,6 +899,14 @@ pub fn describe_gate(gate: &Gate) -> String {
             "the energy per metre along the longitudinal reference at most {ratio} x the scripted gait's"
         ));
     }
+    if !gate.reference_max_energy_ratio.is_empty() {
+        let bars: Vec<String> =
+            gate.reference_max_energy_ratio.iter().map(|(name, bar)| format!("{name} {bar} x")).collect();
+        flight_mode_bars.push(format!(
+            "the energy per metre over the validation's starts, to the scripted gait's on the same starts, of {}",
+            bars.join(", ")
+        ));
+    }
     if let Some([low, high]) = gate.cruise_flap_hz {
         let flight = match gate.cruise_flap_flight {
             CruiseFlapFlight::LongitudinalSegment => "in its cruise segment",
@@ -1057,8 +1064,14 @@ mod tests {
         // Cruise `completed` of 10 at `rms`, longitudinal under the fluid coefficients `fluid` of 100.
         let row = |iteration: usize, completed: usize, rms: f64, fluid: usize| {
             let references = vec![
-                ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms },
-                ReferenceScore { name: "longitudinal~fluid".into(), completed: fluid, episodes: 100, mean_rms_m: 0.3 },
+                ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms, energy_ratio: None },
+                ReferenceScore {
+                    name: "longitudinal~fluid".into(),
+                    completed: fluid,
+                    episodes: 100,
+                    mean_rms_m: 0.3,
+                    energy_ratio: None,
+                },
             ];
             let completed_percent = 100.0 * (completed + fluid) as f64 / 110.0;
             let score = Score { completed_percent, mean_rms_m: rms, references };

@@ -42,17 +42,24 @@ pub struct Selection {
 }
 
 /// The columns a table has beyond the validation set's, from its stage's gate.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct GateColumns {
     /// `glide_fraction`, `energy_ratio`, `cruise_flap_hz` (the gate has a flight-mode bar).
     pub modes: bool,
+    /// `<entry>_energy_ratio` for each of these entries (the gate prices their energy,
+    /// [`Gate::reference_max_energy_ratio`]).
+    pub priced: Vec<String>,
     /// `identification_<axis>_fit_percent` (the gate has an identification bar).
     pub identification: bool,
 }
 
 impl GateColumns {
     pub fn of(gate: &Gate) -> Self {
-        Self { modes: gate_asks_flight_modes(gate), identification: gate.identification_fit_percent.is_some() }
+        Self {
+            modes: gate_asks_flight_modes(gate),
+            priced: gate.reference_max_energy_ratio.keys().cloned().collect(),
+            identification: gate.identification_fit_percent.is_some(),
+        }
     }
 }
 
@@ -65,7 +72,7 @@ impl Selection {
         }
         let error = |message: String| SelectionError::File { path: path.to_owned(), message };
         let mut reader = csv::Reader::from_path(path).map_err(|e| error(e.to_string()))?;
-        let expected = header(references, columns);
+        let expected = header(references, &columns);
         let headers: Vec<String> =
             reader.headers().map_err(|e| error(e.to_string()))?.iter().map(String::from).collect();
         if headers != expected {
@@ -80,21 +87,27 @@ impl Selection {
             let number = |k: usize| -> Result<f64, SelectionError> {
                 record.get(k).and_then(|v| v.parse().ok()).ok_or_else(|| error(format!("row {}: column {k}", line + 2)))
             };
+            let modes_column = FIXED.len() + 3 * references.len();
+            let first_energy = modes_column + if columns.modes { MODE_COLUMNS.len() } else { 0 };
             let references = references
                 .iter()
                 .enumerate()
                 .map(|(k, name)| {
                     let completed = number(FIXED.len() + 3 * k)? as usize;
                     let episodes = number(FIXED.len() + 3 * k + 1)? as usize;
+                    let energy_ratio = match columns.priced.iter().position(|priced| priced == name) {
+                        Some(j) => Some(number(first_energy + j)?),
+                        None => None,
+                    };
                     Ok(ReferenceScore {
                         name: name.clone(),
                         completed,
                         episodes,
                         mean_rms_m: number(FIXED.len() + 3 * k + 2)?,
+                        energy_ratio,
                     })
                 })
                 .collect::<Result<Vec<_>, SelectionError>>()?;
-            let modes_column = FIXED.len() + 3 * references.len();
             let modes = if columns.modes {
                 Some(ModeFigures {
                     glide_fraction: number(modes_column)?,
@@ -104,7 +117,7 @@ impl Selection {
             } else {
                 None
             };
-            let first_fit = modes_column + if columns.modes { MODE_COLUMNS.len() } else { 0 };
+            let first_fit = first_energy + columns.priced.len();
             let identification_fit_percent = match record.get(first_fit) {
                 Some(text) if columns.identification && !text.is_empty() => {
                     Some([number(first_fit)?, number(first_fit + 1)?, number(first_fit + 2)?])
@@ -140,6 +153,10 @@ impl Selection {
                 let f = row.modes.unwrap_or(ModeFigures::NOT_FLOWN);
                 values.extend([f.glide_fraction, f.energy_ratio, f.cruise_flap_hz].map(|x| x.to_string()));
             }
+            for name in &self.columns.priced {
+                let ratio = row.score.reference(name).and_then(|r| r.energy_ratio).unwrap_or(f64::NAN);
+                values.push(ratio.to_string());
+            }
             if self.columns.identification {
                 match row.identification_fit_percent {
                     Some(fits) => values.extend(fits.map(|fit| fit.to_string())),
@@ -148,7 +165,7 @@ impl Selection {
             }
             values
         });
-        flapper_files::write_csv_rows(path, &header(references, self.columns), rows)
+        flapper_files::write_csv_rows(path, &header(references, &self.columns), rows)
             .map_err(|e| SelectionError::File { path: path.to_owned(), message: e.to_string() })
     }
 
@@ -227,7 +244,7 @@ impl Selection {
             .rows
             .iter()
             .filter(|r| r.iteration >= iteration && r.score.meets(gate))
-            .map(|r| (r, flight_mode_bars_met(gate, r.modes.as_ref()), energy(r)))
+            .map(|r| (r, flight_mode_bars_met(gate, r.modes.as_ref(), &r.score), energy(r)))
             .collect();
         let most = tracking.iter().map(|&(_, met, _)| met).max()?;
         let least =
@@ -337,7 +354,9 @@ pub struct Extension {
 /// Whether a validated checkpoint meets every bar of `gate` but the identification's (which is looked
 /// at only then): its iteration, its validation score and its flight modes.
 pub fn meets_flight_bars(gate: &Gate, row: &Validated) -> bool {
-    row.iteration >= gate.min_iterations && row.score.meets(gate) && meets_flight_mode_bars(gate, row.modes.as_ref())
+    row.iteration >= gate.min_iterations
+        && row.score.meets(gate)
+        && meets_flight_mode_bars(gate, row.modes.as_ref(), &row.score)
 }
 
 fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
@@ -348,14 +367,15 @@ fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> 
 }
 
 /// The fixed columns; each reference then adds `<name>_completed`, `<name>_episodes`, `<name>_rms_m`,
-/// then a table with a flight-mode bar has [`MODE_COLUMNS`], and one with identification ends with
-/// `identification_<axis>_fit_percent` for x, y and z.
+/// then a table with a flight-mode bar has [`MODE_COLUMNS`] and `<entry>_energy_ratio` for each entry whose
+/// energy its gate prices, and one with identification ends with `identification_<axis>_fit_percent` for
+/// x, y and z.
 const FIXED: [&str; 5] = ["iteration", "env_steps", "completed_percent", "mean_rms_m", "validation_s"];
 
 /// The flight-mode columns ([`ModeFigures`]).
 const MODE_COLUMNS: [&str; 3] = ["glide_fraction", "energy_ratio", "cruise_flap_hz"];
 
-fn header(references: &[String], gate_columns: GateColumns) -> Vec<String> {
+fn header(references: &[String], gate_columns: &GateColumns) -> Vec<String> {
     let mut columns: Vec<String> = FIXED.iter().map(|c| c.to_string()).collect();
     for name in references {
         columns.extend([format!("{name}_completed"), format!("{name}_episodes"), format!("{name}_rms_m")]);
@@ -363,6 +383,7 @@ fn header(references: &[String], gate_columns: GateColumns) -> Vec<String> {
     if gate_columns.modes {
         columns.extend(MODE_COLUMNS.map(String::from));
     }
+    columns.extend(gate_columns.priced.iter().map(|name| format!("{name}_energy_ratio")));
     if gate_columns.identification {
         columns.extend(AXES.map(|axis| format!("identification_{axis}_fit_percent")));
     }
@@ -470,7 +491,13 @@ impl Validated {
     /// A checkpoint that flew one validation reference, cruise, `completed` of 10 with a mean RMS error of
     /// `rms` (tests).
     pub(crate) fn of_cruise(iteration: usize, completed: usize, rms: f64) -> Self {
-        let references = vec![ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms }];
+        let references = vec![ReferenceScore {
+            name: "cruise".into(),
+            completed,
+            episodes: 10,
+            mean_rms_m: rms,
+            energy_ratio: None,
+        }];
         let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
         Validated {
             iteration,
@@ -645,32 +672,46 @@ mod tests {
         let path = dir.join("selection.csv");
         let names = vec!["cruise".to_owned()];
         let none = GateColumns::default();
-        let selection = Selection { rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)], columns: none };
+        let selection =
+            Selection { rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)], columns: none.clone() };
         selection.write(&path, &names).unwrap();
-        let back = Selection::read(&path, &names, none).unwrap();
+        let back = Selection::read(&path, &names, none.clone()).unwrap();
         assert_eq!(back.rows, selection.rows);
-        let e = Selection::read(&path, &["loop".to_owned()], none).unwrap_err().to_string();
+        let e = Selection::read(&path, &["loop".to_owned()], none.clone()).unwrap_err().to_string();
         assert!(e.contains("selection.csv") && e.contains("loop_completed"), "{e}");
-        let identification = GateColumns { modes: false, identification: true };
-        let e = Selection::read(&path, &names, identification).unwrap_err().to_string();
+        let identification = GateColumns { identification: true, ..none.clone() };
+        let e = Selection::read(&path, &names, identification.clone()).unwrap_err().to_string();
         assert!(e.contains("identification_x_fit_percent"), "a table without the identification columns: {e}");
-        let e = Selection::read(&path, &names, GateColumns { modes: true, identification: false }).unwrap_err();
+        let e = Selection::read(&path, &names, GateColumns { modes: true, ..none.clone() }).unwrap_err();
         assert!(e.to_string().contains("glide_fraction"), "a table without the flight-mode columns: {e}");
-        let mut identified =
-            Selection { rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)], columns: identification };
+        let mut identified = Selection {
+            rows: vec![V::of_cruise(10, 8, 0.5), V::of_cruise(20, 10, 0.25)],
+            columns: identification.clone(),
+        };
         identified.rows[1].identification_fit_percent = Some([81.25, 79.5, 90.0]);
         identified.write(&path, &names).unwrap();
         let back = Selection::read(&path, &names, identification).unwrap();
         assert_eq!(back.rows, identified.rows, "fits where identified, none where not");
-        let both = GateColumns { modes: true, identification: true };
-        let mut glided = Selection { columns: both, ..identified.clone() };
+        let both = GateColumns { modes: true, identification: true, ..none.clone() };
+        let mut glided = Selection { columns: both.clone(), ..identified.clone() };
         glided.rows[0].modes = Some(ModeFigures { glide_fraction: 0.125, energy_ratio: 4.75, cruise_flap_hz: 6.25 });
         glided.rows[1].modes = Some(ModeFigures { glide_fraction: 0.75, energy_ratio: 1.5, cruise_flap_hz: 5.3 });
         glided.write(&path, &names).unwrap();
-        let back = Selection::read(&path, &names, both).unwrap();
+        let back = Selection::read(&path, &names, both.clone()).unwrap();
         assert_eq!(back.rows, glided.rows, "the flight-mode columns between the references and the fits");
         let header = std::fs::read_to_string(&path).unwrap().lines().next().unwrap().to_owned();
         assert!(header.ends_with("cruise_rms_m,glide_fraction,energy_ratio,cruise_flap_hz,identification_x_fit_percent,identification_y_fit_percent,identification_z_fit_percent"), "{header}");
+        let priced = GateColumns { priced: names.clone(), ..both.clone() };
+        let e = Selection::read(&path, &names, priced.clone()).unwrap_err().to_string();
+        assert!(e.contains("cruise_energy_ratio"), "a table without the priced entries' columns: {e}");
+        let mut paid = Selection { columns: priced.clone(), ..glided.clone() };
+        paid.rows[0].score.references[0].energy_ratio = Some(3.125);
+        paid.rows[1].score.references[0].energy_ratio = Some(1.75);
+        paid.write(&path, &names).unwrap();
+        let back = Selection::read(&path, &names, priced).unwrap();
+        assert_eq!(back.rows, paid.rows, "each priced entry's energy ratio after the flight-mode columns");
+        let header = std::fs::read_to_string(&path).unwrap().lines().next().unwrap().to_owned();
+        assert!(header.contains("cruise_flap_hz,cruise_energy_ratio,identification_x_fit_percent"), "{header}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

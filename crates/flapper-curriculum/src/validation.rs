@@ -4,11 +4,13 @@
 //! first, then RMS error. Flights use the CPU-independent inference path, so a checkpoint's
 //! score is the same on every machine and when it is judged again after an interruption.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use flapper_analysis::frontier;
 use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized};
-use flapper_eval::{PolicyFileError, load_flight_policy};
+use flapper_eval::{PolicyFileError, ScriptedGaitConfig, load_flight_policy};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::TaskConfig;
 use flapper_task::config::RandomizationConfig;
@@ -49,6 +51,9 @@ pub struct ValidationEntry {
 pub struct ValidationSet {
     pub entries: Vec<ValidationEntry>,
     pub seed: u64,
+    /// The scripted gait's energy per metre (J/m, the mean over the entry's episodes) on the entries whose
+    /// energy is priced ([`Self::price_energy`]), by entry name: what a checkpoint's is divided by.
+    scripted_energy_per_metre_j: BTreeMap<String, f64>,
 }
 
 impl ValidationSet {
@@ -93,7 +98,45 @@ impl ValidationSet {
             reference,
             randomization: None,
         });
-        Ok(Self { entries: nominal.chain(randomized).collect(), seed })
+        Ok(Self { entries: nominal.chain(randomized).collect(), seed, scripted_energy_per_metre_j: BTreeMap::new() })
+    }
+
+    /// Flies the scripted gait on `names`' entries from the same starts as every checkpoint will, so that
+    /// [`Self::judge`] gives each of them its energy ratio: `flapper eval`'s, the mean energy per metre
+    /// over the episodes, the checkpoint's over the scripted gait's flown with the default task as the
+    /// evaluation flies it.
+    pub fn price_energy<'a>(
+        mut self,
+        robot: &RobotModel,
+        names: impl IntoIterator<Item = &'a String>,
+    ) -> Result<Self, ValidationError> {
+        let scripted = TrackingController::Scripted(ScriptedGaitConfig::default());
+        let task = TaskConfig::default();
+        let period_s = task.control_period_s(robot.timestep_s());
+        for name in names {
+            let entry = self.entries.iter().find(|e| &e.name == name).ok_or_else(|| {
+                ValidationError::FlightModes(format!("'{name}' is not an entry of the validation set"))
+            })?;
+            let results = self.fly(robot, &scripted, &task, entry)?;
+            self.scripted_energy_per_metre_j.insert(name.clone(), mean_energy_per_metre_j(&results, period_s));
+        }
+        Ok(self)
+    }
+
+    fn fly(
+        &self,
+        robot: &RobotModel,
+        controller: &TrackingController,
+        task: &TaskConfig,
+        entry: &ValidationEntry,
+    ) -> Result<Vec<EpisodeResult>, ModelError> {
+        let (reference, episodes) = (entry.reference.clone(), entry.episodes);
+        match &entry.randomization {
+            None => evaluate_tracking(robot, controller, task, reference, episodes, self.seed),
+            Some(randomization) => {
+                evaluate_tracking_randomized(robot, controller, task, randomization, reference, episodes, self.seed)
+            }
+        }
     }
 
     pub fn names(&self) -> Vec<String> {
@@ -104,22 +147,17 @@ impl ValidationSet {
     pub fn judge(&self, robot: &RobotModel, policy_path: &Path) -> Result<Score, ValidationError> {
         let (policy, task) = load_flight_policy(policy_path)?;
         let controller = TrackingController::Policy(Arc::new(policy));
+        let period_s = task.control_period_s(robot.timestep_s());
         let mut per_reference = Vec::new();
         for entry in &self.entries {
-            let (reference, episodes) = (entry.reference.clone(), entry.episodes);
-            let results = match &entry.randomization {
-                None => evaluate_tracking(robot, &controller, &task, reference, episodes, self.seed)?,
-                Some(randomization) => evaluate_tracking_randomized(
-                    robot,
-                    &controller,
-                    &task,
-                    randomization,
-                    reference,
-                    episodes,
-                    self.seed,
-                )?,
-            };
-            per_reference.push(ReferenceScore::of(&entry.name, &results));
+            let results = self.fly(robot, &controller, &task, entry)?;
+            let mut score = ReferenceScore::of(&entry.name, &results);
+            if let Some(&scripted) = self.scripted_energy_per_metre_j.get(&entry.name) {
+                // NaN (no bar met) where the scripted gait flew no energy.
+                let own = mean_energy_per_metre_j(&results, period_s);
+                score.energy_ratio = Some(frontier::energy_ratio(own, scripted).unwrap_or(f64::NAN));
+            }
+            per_reference.push(score);
         }
         Ok(Score::of(per_reference))
     }
@@ -133,6 +171,15 @@ pub struct ReferenceScore {
     pub episodes: usize,
     /// Mean over all its episodes of each episode's RMS error (m).
     pub mean_rms_m: f64,
+    /// Its energy per metre over the scripted gait's from the same starts, where the stage prices it
+    /// ([`ValidationSet::price_energy`]); NaN where the scripted gait flew no energy.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_ratio: Option<f64>,
+}
+
+/// As `flapper eval`'s table: the mean over the episodes of each one's energy per metre (J/m).
+fn mean_energy_per_metre_j(results: &[EpisodeResult], period_s: f64) -> f64 {
+    results.iter().map(|r| r.energy_per_metre_j(period_s)).sum::<f64>() / results.len().max(1) as f64
 }
 
 impl ReferenceScore {
@@ -143,6 +190,7 @@ impl ReferenceScore {
             completed: results.iter().filter(|r| r.completed()).count(),
             episodes: results.len(),
             mean_rms_m: rms / results.len().max(1) as f64,
+            energy_ratio: None,
         }
     }
 
@@ -259,6 +307,7 @@ mod tests {
                     completed,
                     episodes,
                     mean_rms_m,
+                    energy_ratio: None,
                 })
                 .collect(),
         )
@@ -288,7 +337,13 @@ mod tests {
     fn an_entry_with_its_own_rms_bar_is_judged_on_its_own_error() {
         let flown = Score::of(
             [("cruise", 0.1), ("longitudinal", 0.39), ("lateral~table3", 0.8)]
-                .map(|(name, mean_rms_m)| ReferenceScore { name: name.into(), completed: 10, episodes: 10, mean_rms_m })
+                .map(|(name, mean_rms_m)| ReferenceScore {
+                    name: name.into(),
+                    completed: 10,
+                    episodes: 10,
+                    mean_rms_m,
+                    energy_ratio: None,
+                })
                 .to_vec(),
         );
         let bars = |bars: &[(&str, f64)]| Gate {
