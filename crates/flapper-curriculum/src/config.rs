@@ -269,10 +269,10 @@ pub struct Gate {
     pub max_energy_ratio: Option<f64>,
     /// Some validation entries' energy per metre, the mean over their episodes, at most this many times
     /// the scripted gait's from the same starts, by entry name (`{ longitudinal = 1.5, immelmann = 3.0 }`):
-    /// `flapper eval`'s energy ratio, judged on the validation's starts rather than one flight from the
-    /// exact start (`max_energy_ratio`), which read seed 2's sixth stage at 1.13 x where 100 starts read
-    /// 1.79 x. A flight-mode bar: sought unless `flight_modes_required`. The scripted gait flies each
-    /// priced entry once per stage.
+    /// `flapper eval`'s energy ratio on every reference the issue prices, not only on the longitudinal
+    /// flight from its exact start (`max_energy_ratio`, about 0.8 of the ratio over 100 starts). A
+    /// flight-mode bar: sought unless `flight_modes_required`. The scripted gait flies each priced entry
+    /// once per stage.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub reference_max_energy_ratio: BTreeMap<String, f64>,
     /// The flap's fundamental in the same flight's cruise segment (or the flight `cruise_flap_flight`
