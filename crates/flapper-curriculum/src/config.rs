@@ -362,6 +362,18 @@ impl Gate {
     }
 }
 
+/// A gate's bars per validation entry (`key`): each names an entry of the set and is positive and finite
+/// (`what` a bar must be, for the message).
+fn entry_bars(key: &str, bars: &BTreeMap<String, f64>, entries: &[String], what: &str) -> Result<(), String> {
+    if let Some((name, _)) = bars.iter().find(|(name, _)| !entries.contains(name)) {
+        return Err(format!("{key} names '{name}', which is not a validation entry ({})", entries.join(", ")));
+    }
+    if let Some((name, bar)) = bars.iter().find(|(_, bar)| !(**bar > 0.0 && bar.is_finite())) {
+        return Err(format!("{key}: '{name}' needs {what}, got {bar}"));
+    }
+    Ok(())
+}
+
 impl CurriculumConfig {
     /// Reads, resolves (a file that extends another is laid over it) and checks a curriculum file.
     pub fn load(path: &Path) -> Result<Self, CurriculumConfigError> {
@@ -465,31 +477,15 @@ impl CurriculumConfig {
                 return Err(bad(format!("validation.reference_episodes: '{name}' needs episodes > 0, got {episodes}")));
             }
             let entries = v.entry_names();
-            if let Some((name, _)) = g.reference_max_rms_m.iter().find(|(name, _)| !entries.contains(name)) {
-                return Err(bad(format!(
-                    "gate.reference_max_rms_m names '{name}', which is not a validation entry ({})",
-                    entries.join(", ")
-                )));
-            }
-            if let Some((name, rms)) = g.reference_max_rms_m.iter().find(|(_, rms)| !(**rms > 0.0 && rms.is_finite())) {
-                return Err(bad(format!(
-                    "gate.reference_max_rms_m: '{name}' needs a positive bar in metres, got {rms}"
-                )));
-            }
-            if let Some((name, _)) = g.reference_max_energy_ratio.iter().find(|(name, _)| !entries.contains(name)) {
-                return Err(bad(format!(
-                    "gate.reference_max_energy_ratio names '{name}', which is not a validation entry ({})",
-                    entries.join(", ")
-                )));
-            }
-            if let Some((name, ratio)) =
-                g.reference_max_energy_ratio.iter().find(|(_, ratio)| !(**ratio > 0.0 && ratio.is_finite()))
-            {
-                return Err(bad(format!(
-                    "gate.reference_max_energy_ratio: '{name}' needs a positive ratio to the scripted gait's energy \
-                     per metre, got {ratio}"
-                )));
-            }
+            entry_bars("gate.reference_max_rms_m", &g.reference_max_rms_m, &entries, "a positive bar in metres")
+                .map_err(&bad)?;
+            entry_bars(
+                "gate.reference_max_energy_ratio",
+                &g.reference_max_energy_ratio,
+                &entries,
+                "a positive ratio to the scripted gait's energy per metre",
+            )
+            .map_err(&bad)?;
             if let Some(count) = stage.average_checkpoints
                 && !(1..=MAX_AVERAGED_CHECKPOINTS).contains(&count)
             {

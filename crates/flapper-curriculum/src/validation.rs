@@ -9,7 +9,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flapper_analysis::frontier;
-use flapper_eval::tracking::{EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized};
+use flapper_eval::tracking::{
+    EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized, mean_energy_per_metre_j,
+};
 use flapper_eval::{PolicyFileError, ScriptedGaitConfig, load_flight_policy};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::TaskConfig;
@@ -175,11 +177,6 @@ pub struct ReferenceScore {
     /// ([`ValidationSet::price_energy`]); NaN where the scripted gait flew no energy.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy_ratio: Option<f64>,
-}
-
-/// As `flapper eval`'s table: the mean over the episodes of each one's energy per metre (J/m).
-fn mean_energy_per_metre_j(results: &[EpisodeResult], period_s: f64) -> f64 {
-    results.iter().map(|r| r.energy_per_metre_j(period_s)).sum::<f64>() / results.len().max(1) as f64
 }
 
 impl ReferenceScore {

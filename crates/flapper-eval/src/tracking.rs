@@ -134,6 +134,12 @@ pub fn energy_per_metre_j<S: std::borrow::Borrow<TrackingStep>>(steps: &[S], per
     energy / distance.max(1e-9)
 }
 
+/// The mean over episodes of each one's energy per metre (J/m): `flapper eval`'s figure, and what a
+/// curriculum gate's energy bar on a validation entry reads.
+pub fn mean_energy_per_metre_j(results: &[EpisodeResult], period_s: f64) -> f64 {
+    results.iter().map(|r| r.energy_per_metre_j(period_s)).sum::<f64>() / results.len().max(1) as f64
+}
+
 /// The speeds along a path (m/s) the final controller is known to track: its level-flight envelope
 /// (`flapper robustness --reference longitudinal`, "envelope": completed in at least 90% of 20
 /// episodes of 15 s level flight). A path outside it may still be flown, but nothing vouches for it.

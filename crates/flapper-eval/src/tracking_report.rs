@@ -152,7 +152,7 @@ impl TrackingSummary {
             mean_airspeed_mps: mean(&|r| r.mean_airspeed_mps()),
             mean_power_w: mean(&|r| r.mean_power_w()),
             mean_absolute_power_w: mean(&|r| r.mean_absolute_power_w()),
-            energy_per_metre_j: mean(&|r| r.energy_per_metre_j(period_s)),
+            energy_per_metre_j: crate::tracking::mean_energy_per_metre_j(results, period_s),
             frequency_hz,
             energy_fraction,
             pitch_lead_deg: circular_mean_deg(
