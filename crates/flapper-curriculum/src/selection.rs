@@ -222,8 +222,9 @@ impl Selection {
 
     /// Where the gate's flight-mode bars are sought ([`Gate::flight_modes_required`] unset): among the
     /// checkpoints that meet every tracking bar (from `min_iterations` on), the one that meets the most
-    /// flight-mode bars, then flies with the least energy per metre (the best score, then the earliest, of
-    /// equals). `None` where the gate asks no flight mode, requires them, or no checkpoint tracks.
+    /// flight-mode bars, then flies with the least energy ([`energy_to_break_ties`]; the best score, then
+    /// the earliest, of equals). `None` where the gate asks no flight mode, requires them, or no
+    /// checkpoint tracks.
     pub fn most_efficient_tracking<'a>(&'a self, gate: &'a Gate) -> Option<&'a Validated> {
         self.most_efficient_tracking_from(gate, gate.min_iterations)
     }
@@ -235,11 +236,7 @@ impl Selection {
         if !gate_asks_flight_modes(gate) || gate.flight_modes_required {
             return None;
         }
-        // Unmeasured or not flown to its end (NaN): the least efficient.
-        let energy = |r: &Validated| match r.modes.as_ref().map(|f| f.energy_ratio) {
-            Some(ratio) if ratio.is_finite() => ratio,
-            _ => f64::INFINITY,
-        };
+        let energy = |r: &Validated| energy_to_break_ties(gate, r);
         let tracking: Vec<(&Validated, usize, f64)> = self
             .rows
             .iter()
@@ -357,6 +354,23 @@ pub fn meets_flight_bars(gate: &Gate, row: &Validated) -> bool {
     row.iteration >= gate.min_iterations
         && row.score.meets(gate)
         && meets_flight_mode_bars(gate, row.modes.as_ref(), &row.score)
+}
+
+/// How much energy a tracking checkpoint spends, for [`Selection::most_efficient_tracking`] to choose
+/// among those meeting as many flight-mode bars: where the gate prices named entries
+/// ([`Gate::reference_max_energy_ratio`]), the largest of their ratios over their bars -- the entry
+/// furthest from (or nearest to failing) its bar, over the validation's starts -- else the exact-start
+/// longitudinal flight's ratio to the scripted gait's (blind to every other reference). Unmeasured or
+/// not flown to its end (NaN, missing): the least efficient, infinity.
+pub fn energy_to_break_ties(gate: &Gate, row: &Validated) -> f64 {
+    let finite = |ratio: Option<f64>| ratio.filter(|r| r.is_finite()).unwrap_or(f64::INFINITY);
+    if gate.reference_max_energy_ratio.is_empty() {
+        return finite(row.modes.as_ref().map(|f| f.energy_ratio));
+    }
+    gate.reference_max_energy_ratio
+        .iter()
+        .map(|(name, bar)| finite(row.score.reference(name).and_then(|r| r.energy_ratio)) / bar)
+        .fold(0.0, f64::max)
 }
 
 fn best<'a>(rows: impl Iterator<Item = &'a Validated>) -> Option<&'a Validated> {
@@ -574,6 +588,51 @@ mod tests {
         let required = Gate { flight_modes_required: true, ..gate.clone() };
         assert!(selection.most_efficient_tracking(&required).is_none(), "required: no fallback");
         assert!(selection.most_efficient_tracking(&Gate::completing(90.0)).is_none(), "no flight-mode bar asked");
+    }
+
+    #[test]
+    fn priced_entries_break_ties_by_their_largest_ratio_over_its_bar() {
+        // Cruise priced at 3 x, longitudinal at 1.5 x; each row: exact-start ratio, cruise, longitudinal.
+        let with = |iteration, exact: f64, cruise: Option<f64>, longitudinal: Option<f64>| {
+            let mut row = V::of_cruise(iteration, 10, 0.2);
+            row.score.references[0].energy_ratio = cruise;
+            row.score.references.push(ReferenceScore {
+                name: "longitudinal".into(),
+                completed: 10,
+                episodes: 10,
+                mean_rms_m: 0.2,
+                energy_ratio: longitudinal,
+            });
+            Validated {
+                modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio: exact, cruise_flap_hz: 5.0 }),
+                ..row
+            }
+        };
+        let selection = Selection {
+            rows: vec![
+                with(100, 1.00, Some(3.3), Some(1.70)), // the least exact-start energy, both entries over their bars
+                with(200, 1.30, Some(3.2), Some(1.65)), // over by 1.10 (longitudinal) and 1.07 (cruise)
+                with(300, 1.40, Some(3.6), Some(1.55)), // over by 1.20 at the cruise
+                with(400, 1.25, None, Some(1.6)),       // cruise not flown: the least efficient
+            ],
+            columns: GateColumns::default(),
+        };
+        let priced = BTreeMap::from([("cruise".to_owned(), 3.0), ("longitudinal".to_owned(), 1.5)]);
+        let gate = Gate {
+            max_energy_ratio: Some(0.9),
+            reference_max_energy_ratio: priced,
+            min_iterations: 100,
+            ..Gate::completing(90.0)
+        };
+        let ties: Vec<f64> = selection.rows.iter().map(|r| energy_to_break_ties(&gate, r)).collect();
+        assert!((ties[0] - 1.7 / 1.5).abs() < 1e-12 && (ties[1] - 1.1).abs() < 1e-12, "{ties:?}");
+        assert!((ties[2] - 1.2).abs() < 1e-12 && ties[3].is_infinite(), "{ties:?}");
+        // Every row meets no bar: 200 is furthest under, not 100 (the least exact-start energy).
+        assert_eq!(selection.most_efficient_tracking(&gate).map(|r| r.iteration), Some(200));
+        // Without priced entries the exact-start ratio decides, as before.
+        let unpriced = Gate { reference_max_energy_ratio: BTreeMap::new(), ..gate.clone() };
+        assert_eq!(energy_to_break_ties(&unpriced, &selection.rows[1]), 1.30);
+        assert_eq!(selection.most_efficient_tracking(&unpriced).map(|r| r.iteration), Some(100));
     }
 
     #[test]
