@@ -745,18 +745,22 @@ task = { stage = 2 }
     #[test]
     fn the_shipped_curriculum_reads_and_fits_the_papers_budget() {
         let c = shipped("curriculum.toml");
-        assert_eq!(task_stages(&c), [1, 2, 3, 4, 4], "the paper's four stages in order, then the efficient flight");
+        assert_eq!(
+            task_stages(&c),
+            [1, 2, 3, 4, 4, 4],
+            "the paper's four stages in order, then the efficient flight and the efficient manoeuvres"
+        );
         assert_eq!(
             path_start_probabilities(&c),
-            [0.0, 0.0, 0.5, 0.0, 0.0],
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
             "stage 3's episodes start along their paths, and no other's"
         );
         let restarts: Vec<Option<f32>> = c.stages.iter().map(|s| s.restart_noise_std).collect();
-        assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None], "stalled, stages 3 and 4 restart");
+        assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None, None], "stalled, stages 3 and 4 restart");
         let optional: Vec<bool> = c.stages.iter().map(|s| s.optional).collect();
-        assert_eq!(optional, [false, false, false, false, true], "a missed stage 5 leaves stage 4's controller");
+        assert_eq!(optional, [false, false, false, false, true, true], "a missed refinement leaves the one before");
         let rms_sought: Vec<bool> = c.stages.iter().map(|s| s.gate.rms_sought).collect();
-        assert_eq!(rms_sought, [false, true, false, true, false], "stages 2 and 4 hand over one that completes");
+        assert_eq!(rms_sought, [false, true, false, true, false, false], "stages 2 and 4 hand over one that completes");
         assert!(!c.stages[3].gate.reference_max_rms_m.is_empty(), "with its RMS bars");
         assert_eq!(c.stages[3].as_trained(), c.stages[3].as_trained().as_trained(), "as trained: idempotent");
         assert!(!c.stages[3].as_trained().gate.rms_sought, "decided at the budget's end: not part of training");
@@ -765,6 +769,19 @@ task = { stage = 2 }
         let gate = &c.stages[4].gate;
         assert!(gate.max_energy_ratio.is_some() && gate.cruise_flap_hz == Some([4.0, 6.0]));
         assert_eq!(c.stages[4].validation, c.stages[3].validation, "judged on stage 4's validation set");
+        // The sixth stage: stage 5's task and validation set, the energy priced nearly linearly, every named
+        // reference's energy judged at validation, seed 1's stage 5 keeping its 600-iteration extension.
+        let manoeuvres = c.stage_train_config(6).unwrap();
+        assert_eq!(c.stages[5].validation, c.stages[4].validation, "judged on stage 5's validation set");
+        assert_eq!((manoeuvres.task.reward.energy_weight, manoeuvres.task.reward.energy_scale_w), (0.3, 100.0));
+        assert_eq!(manoeuvres.task.reward.position_scale_m, 0.85);
+        assert_eq!(manoeuvres.ppo, efficient.ppo, "stage 5's learner settings");
+        let priced = &c.stages[5].gate.reference_max_energy_ratio;
+        assert_eq!(priced.len(), 8, "every named reference's energy priced: {priced:?}");
+        assert_eq!((priced["longitudinal"], priced["immelmann"]), (1.45, 2.9));
+        let seed1_before_stage5 = 2504 * 6144;
+        assert_eq!(c.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600);
+        assert_eq!(c.stage_iterations(6, seed1_before_stage5 + 1800 * 6144).unwrap(), 550);
         check_budget(&c, "curriculum.toml");
     }
 
@@ -811,9 +828,10 @@ task = { stage = 2 }
     fn the_experiments_build_on_the_shipped_curriculum_and_read() {
         // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
         // each one's section): stages 1-4 are the shipped ones by construction (the ones run before the
-        // fifth stage shipped leave it out), and each must still read and check after any change to the
-        // curriculum it builds on.
-        let five = shipped("curriculum.toml");
+        // fifth stage shipped leave it out, and every one the sixth), and each must still read and check after
+        // any change to the curriculum it builds on.
+        let six = shipped("curriculum.toml");
+        let five = CurriculumConfig { stages: six.stages[..5].to_vec(), ..six.clone() };
         let four = CurriculumConfig { stages: five.stages[..4].to_vec(), ..five.clone() };
         let flight_modes = shipped("experiments/curriculum-flight-modes.toml");
         assert_eq!(task_stages(&flight_modes), [1, 2, 3, 4, 4]);
