@@ -4,6 +4,7 @@ the worked example flies it in stock MuJoCo as flapper eval does."""
 
 import importlib.util
 import json
+import re
 import subprocess
 
 import numpy as np
@@ -58,9 +59,11 @@ def test_onnx_export_is_valid_and_gives_flappers_actions_on_a_real_flight(flight
     assert json.loads(meta["joint_names"]) == ["flap_left", "pitch_left", "flap_right", "pitch_right", "tail_pitch"]
     assert np.allclose(np.degrees(json.loads(meta["joint_ranges_rad"])), [[-60, 60], [-45, 45], [-60, 60], [-45, 45], [-40, 40]])
     assert float(meta["control_rate_hz"]) == 50.0 and float(meta["filter_cutoff_hz"]) == 7.0
-    assert float(meta["passive_feathering_s"]) == 0.0, "the final controller twists no wing"
     # The facts of the policy file itself (its .json beside it, written by training).
     facts = json.loads((ROOT / (FINAL + ".json")).read_text())
+    # The final controller's sixth stage trained with passive feathering: the twist travels with the export.
+    trained_twist = float(re.search(r"\npassive_feathering_s = (\S+)\n", facts["config_toml"]).group(1))
+    assert float(meta["passive_feathering_s"]) == trained_twist == 0.01
     assert meta["training_env_steps"] == str(facts["env_steps"]) and meta["source_kind"] == "policy"
 
     session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
