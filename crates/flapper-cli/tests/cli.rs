@@ -810,6 +810,7 @@ fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ra
     // `flapper eval --policy P --reference longitudinal --episodes 2 --seed 11`, as eval_command flies it.
     let robot = flapper_sim::RobotModel::flapper().unwrap();
     let (actor, task) = flapper_eval::load_flight_policy(std::path::Path::new(&policy)).unwrap();
+    let actor = Arc::new(actor);
     let period_s = task.control_period_s(robot.timestep_s());
     let reference =
         Arc::new(flapper_task::reference::resolve("longitudinal", period_s, task.observation.lookahead_steps).unwrap());
@@ -818,7 +819,7 @@ fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ra
         let window = flapper_task::reference::named::manoeuvre_window_s(reference.name());
         TrackingSummary::of(&results, task.control_period_s(robot.timestep_s()), window)
     };
-    let by_policy = eval(TrackingController::Policy(Arc::new(actor)), &task);
+    let by_policy = eval(TrackingController::Policy(Arc::clone(&actor)), &task);
     let by_scripted = eval(TrackingController::Scripted(Default::default()), &TaskConfig::default());
     let at = |decimals: usize, x: f64| Some(format!("{x:.decimals$}").parse::<f64>().unwrap());
     assert_eq!(final_row.longitudinal_completed, Some(by_policy.completed));
@@ -833,14 +834,9 @@ fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ra
     // The glide fraction is `flapper modes`' from the exact start (the final controller flaps through nearly
     // all of the glide segment: 0.02), the flap at the paper's 4-6 Hz in the cruise (its fifth and sixth
     // stages' gates ask it; 5.74 Hz over 100 episodes), and it flies the rest.
-    let modes = flapper_analysis::modes::measure_controller_flight_modes(
-        &robot,
-        &TrackingController::Policy(Arc::new(
-            flapper_eval::load_flight_policy(std::path::Path::new(&policy)).unwrap().0,
-        )),
-        &task,
-    )
-    .unwrap();
+    let modes =
+        flapper_analysis::modes::measure_controller_flight_modes(&robot, &TrackingController::Policy(actor), &task)
+            .unwrap();
     assert_eq!(final_row.glide_fraction, at(3, modes.glide_segment_fraction()));
     assert!(final_row.cruise_flap_hz.is_some_and(|hz| (4.0..=6.0).contains(&hz)), "{final_row:?}");
     assert_eq!(final_row.level3_episodes, Some(2));

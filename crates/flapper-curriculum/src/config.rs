@@ -731,6 +731,9 @@ task = { stage = 2 }
         }
     }
 
+    /// The environment steps seed 1's shipped stages 1-4 trained (2504 iterations of 6144 steps).
+    const SEED1_BEFORE_STAGE5: u64 = 2504 * 6144;
+
     fn task_stages(c: &CurriculumConfig) -> Vec<u8> {
         (1..=c.stages.len()).map(|k| c.stage_train_config(k).unwrap().task.stage).collect()
     }
@@ -779,9 +782,8 @@ task = { stage = 2 }
         let priced = &c.stages[5].gate.reference_max_energy_ratio;
         assert_eq!(priced.len(), 8, "every named reference's energy priced: {priced:?}");
         assert_eq!((priced["longitudinal"], priced["immelmann"]), (1.45, 2.9));
-        let seed1_before_stage5 = 2504 * 6144;
-        assert_eq!(c.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600);
-        assert_eq!(c.stage_iterations(6, seed1_before_stage5 + 1800 * 6144).unwrap(), 550);
+        assert_eq!(c.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 600);
+        assert_eq!(c.stage_iterations(6, SEED1_BEFORE_STAGE5 + 1800 * 6144).unwrap(), 550);
         check_budget(&c, "curriculum.toml");
     }
 
@@ -883,16 +885,15 @@ task = { stage = 2 }
         // in whole validations of 25) when it reserves them; a reservation of 1100 leaves stage 5 one
         // validation interval more (50 of the 78 left).
         let slope_sixth = shipped("experiments/curriculum-glide-slope-stage.toml");
-        let seed1_before_stage5 = 2504 * 6144;
-        assert_eq!(slope_sixth.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600, "nothing kept back");
+        assert_eq!(slope_sixth.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 600, "nothing kept back");
         let mut reserving = slope_sixth.clone();
         reserving.stages[5].max_iterations = 1175;
         reserving.stages[5].reserved_iterations = Some(1175);
-        assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 0);
-        assert_eq!(reserving.stage_iterations(5, seed1_before_stage5).unwrap(), 1200, "its own budget is kept");
-        assert_eq!(reserving.stage_iterations(6, seed1_before_stage5 + 1200 * 6144).unwrap(), 1175);
+        assert_eq!(reserving.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 0);
+        assert_eq!(reserving.stage_iterations(5, SEED1_BEFORE_STAGE5).unwrap(), 1200, "its own budget is kept");
+        assert_eq!(reserving.stage_iterations(6, SEED1_BEFORE_STAGE5 + 1200 * 6144).unwrap(), 1175);
         reserving.stages[5].reserved_iterations = Some(1100);
-        assert_eq!(reserving.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 50);
+        assert_eq!(reserving.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 50);
         // Against a required stage an optional one's reservation holds nothing back: seed 3's stage 4,
         // stalled at its 1000th iteration after 3103 of stages 1-3, restarts for its half budget, 500, with
         // the sixth stage reserving 1100 as without the reservation. Were the sixth stage required, its
@@ -908,8 +909,8 @@ task = { stage = 2 }
         // extension, so its first five stages train the shipped bits and the run stays within the 30 M.
         let light = shipped("experiments/curriculum-light-feathering-stage.toml");
         assert!(light.stages[..5] == five.stages[..] && light.max_env_steps == five.max_env_steps);
-        assert_eq!(light.extension_iterations(5, seed1_before_stage5, 1200).unwrap(), 600);
-        assert_eq!(light.stage_iterations(6, seed1_before_stage5 + 1800 * 6144).unwrap(), 300);
+        assert_eq!(light.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 600);
+        assert_eq!(light.stage_iterations(6, SEED1_BEFORE_STAGE5 + 1800 * 6144).unwrap(), 300);
         let twisted = light.stage_train_config(6).unwrap();
         assert_eq!(twisted.task.control.passive_feathering_s, 0.01);
         assert_eq!(twisted.task.reference.loop_probability, 0.6);

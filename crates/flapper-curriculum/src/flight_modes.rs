@@ -132,7 +132,7 @@ fn flight_mode_verdicts<'a>(
     let entries = gate
         .reference_max_energy_ratio
         .iter()
-        .map(|(name, bar)| Some(score.reference(name).and_then(|r| r.energy_ratio).is_some_and(|ratio| ratio <= *bar)));
+        .map(|(name, bar)| Some(score.energy_ratio(name).is_some_and(|ratio| ratio <= *bar)));
     flight.into_iter().chain(entries)
 }
 

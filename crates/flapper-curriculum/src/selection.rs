@@ -154,7 +154,7 @@ impl Selection {
                 values.extend([f.glide_fraction, f.energy_ratio, f.cruise_flap_hz].map(|x| x.to_string()));
             }
             for name in &self.columns.priced {
-                let ratio = row.score.reference(name).and_then(|r| r.energy_ratio).unwrap_or(f64::NAN);
+                let ratio = row.score.energy_ratio(name).unwrap_or(f64::NAN);
                 values.push(ratio.to_string());
             }
             if self.columns.identification {
@@ -369,7 +369,7 @@ pub fn energy_to_break_ties(gate: &Gate, row: &Validated) -> f64 {
     }
     gate.reference_max_energy_ratio
         .iter()
-        .map(|(name, bar)| finite(row.score.reference(name).and_then(|r| r.energy_ratio)) / bar)
+        .map(|(name, bar)| finite(row.score.energy_ratio(name)) / bar)
         .fold(0.0, f64::max)
 }
 

@@ -283,6 +283,11 @@ impl Score {
     pub fn reference(&self, name: &str) -> Option<&ReferenceScore> {
         self.references.iter().find(|r| r.name == name)
     }
+
+    /// The energy ratio of entry `name` over its validation's starts, where the gate priced it.
+    pub fn energy_ratio(&self, name: &str) -> Option<f64> {
+        self.reference(name).and_then(|r| r.energy_ratio)
+    }
 }
 
 #[cfg(test)]
