@@ -327,9 +327,18 @@ pub enum CruiseFlapFlight {
     LongitudinalSegment,
     /// The cruise reference (30 s at 3.8 m/s) flown once more from its exact start, its fundamental
     /// after the first second as `flapper eval` takes it: the flight the efficient-bird bar reads (the
-    /// eval table's flap_left row on cruise), for one more 30 s flight per validation.
+    /// eval table's flap_left row on cruise), for one more 30 s flight per validation. One start reads
+    /// up to 0.5 Hz from the mean over 100 (6.17 Hz against 5.74 for the shipped sixth stage's pick).
     CruiseReference,
+    /// The validation's own `cruise` entry: the flap's fundamental after the first second of each of its
+    /// randomized starts, averaged as `flapper eval`'s table averages its starts (the same figure as
+    /// the efficient-bird bar reads, from the validation's starts instead of the evaluation's); no extra
+    /// flight. The validation must fly the cruise reference.
+    ValidationStarts,
 }
+
+/// The validation entry [`CruiseFlapFlight::ValidationStarts`] reads the flap from.
+pub const CRUISE_ENTRY: &str = "cruise";
 
 impl CruiseFlapFlight {
     fn is_default(&self) -> bool {
@@ -460,6 +469,15 @@ impl CurriculumConfig {
             {
                 return Err(bad(format!(
                     "gate.cruise_flap_hz is a range [low, high] of frequencies with 0 < low < high, got [{low}, {high}]"
+                )));
+            }
+            if g.cruise_flap_flight == CruiseFlapFlight::ValidationStarts
+                && !v.entry_names().iter().any(|name| name == CRUISE_ENTRY)
+            {
+                return Err(bad(format!(
+                    "gate.cruise_flap_flight = \"validation_starts\" reads the flap on the validation's \
+                     '{CRUISE_ENTRY}' entry: add \"{CRUISE_ENTRY}\" to validation.references (they are {})",
+                    v.references.join(", ")
                 )));
             }
             if g.identification_required && g.identification_fit_percent.is_none() {
@@ -1260,6 +1278,17 @@ task = { stage = 3 }
         assert_eq!(c.stages[0].gate.cruise_flap_flight, CruiseFlapFlight::CruiseReference);
         assert!(c.to_toml().contains("cruise_flap_flight = \"cruise_reference\""));
         assert_eq!(CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap(), c);
+        let starts = "completed_percent = 0, cruise_flap_hz = [4.0, 6.0], cruise_flap_flight = \"validation_starts\" }";
+        let c = CurriculumConfig::from_toml(&TINY.replacen("completed_percent = 0 }", starts, 1), "ok.toml").unwrap();
+        assert_eq!(c.stages[0].gate.cruise_flap_flight, CruiseFlapFlight::ValidationStarts);
+        assert_eq!(CurriculumConfig::from_toml(&c.to_toml(), "saved").unwrap(), c);
+        let no_cruise =
+            TINY.replacen("references = [\"cruise\"], episodes = 1 }", "references = [\"lateral\"], episodes = 1 }", 1);
+        assert_ne!(no_cruise, TINY, "the test flies no cruise in stage 1");
+        let e = CurriculumConfig::from_toml(&no_cruise.replacen("completed_percent = 0 }", starts, 1), "bad.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("stage 1") && e.contains("validation_starts") && e.contains("lateral"), "{e}");
         let plain = CurriculumConfig::from_toml(TINY, "ok.toml").unwrap();
         assert_eq!(plain.stages[0].gate.cruise_flap_flight, CruiseFlapFlight::LongitudinalSegment);
         assert!(

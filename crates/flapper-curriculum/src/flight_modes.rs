@@ -69,7 +69,8 @@ pub fn flight_mode_figures(
     // The ratio as `flapper frontier` takes it; NaN (no bar met) where the scripted gait flew no energy.
     let energy_ratio = frontier::energy_ratio(own, scripted.energy_per_metre_j(period_s)).unwrap_or(f64::NAN);
     let cruise_flap_hz = match flap_flight {
-        CruiseFlapFlight::LongitudinalSegment => {
+        // The validation's starts are read by the validation itself (`ValidationSet::read_flap_on`).
+        CruiseFlapFlight::LongitudinalSegment | CruiseFlapFlight::ValidationStarts => {
             let cruise = SEGMENTS.iter().position(|(name, _, _)| *name == "cruise").expect("the first segment");
             modes.report.segments[cruise].flap_fundamental_hz
         }
@@ -155,6 +156,7 @@ mod tests {
                 episodes: 50,
                 mean_rms_m: 0.2,
                 energy_ratio,
+                flap_hz: None,
             })
             .collect();
         Score { completed_percent: 100.0, mean_rms_m: 0.2, references }

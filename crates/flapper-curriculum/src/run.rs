@@ -23,7 +23,7 @@ use flapper_ppo::{IterationLog, Start};
 use flapper_sim::RobotModel;
 use flapper_train::run::{RunError, flight_trainer, saved_config};
 
-use crate::config::{CruiseFlapFlight, CurriculumConfig, Gate, StageConfig};
+use crate::config::{CRUISE_ENTRY, CruiseFlapFlight, CurriculumConfig, Gate, StageConfig};
 use crate::error::CurriculumError;
 use crate::figure::write_curriculum_figure;
 use crate::flight_modes::{ModeFigures, flight_mode_figures, gate_asks_flight_modes, meets_flight_mode_bars};
@@ -338,7 +338,8 @@ fn run_stage(
     train_config.runner.iterations = iterations;
     let set = Arc::new(
         ValidationSet::new(&stage.validation, &train_config.task, robot.timestep_s(), config.validation_seed(number))?
-            .price_energy(robot, stage.gate.reference_max_energy_ratio.keys())?,
+            .price_energy(robot, stage.gate.reference_max_energy_ratio.keys())?
+            .read_flap_on(reads_flap_on_validation(&stage.gate).then_some(CRUISE_ENTRY))?,
     );
     let names = set.names();
     let selection_path = here.join("selection.csv");
@@ -689,16 +690,30 @@ fn judge(
 ) -> Result<Validated, ValidationError> {
     let began = Instant::now();
     let score = set.judge(robot, path)?;
-    // The cruise reference is flown for the frequency bar only.
-    let flap_flight =
-        if gate.cruise_flap_hz.is_some() { gate.cruise_flap_flight } else { CruiseFlapFlight::LongitudinalSegment };
-    let modes = if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path, flap_flight)?) } else { None };
+    // The cruise reference is flown again for the frequency bar only; the validation's starts need no flight.
+    let flap_flight = match gate.cruise_flap_flight {
+        CruiseFlapFlight::CruiseReference if gate.cruise_flap_hz.is_some() => CruiseFlapFlight::CruiseReference,
+        _ => CruiseFlapFlight::LongitudinalSegment,
+    };
+    let mut modes =
+        if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path, flap_flight)?) } else { None };
+    if let Some(figures) = modes.as_mut()
+        && reads_flap_on_validation(gate)
+    {
+        let cruise = score.references.iter().find(|r| r.name == CRUISE_ENTRY);
+        figures.cruise_flap_hz = cruise.and_then(|r| r.flap_hz).unwrap_or(f64::NAN);
+    }
     let mut row = Validated { iteration, env_steps, validation_s: 0.0, score, modes, identification_fit_percent: None };
     if gate.identification_fit_percent.is_some() && meets_flight_bars(gate, &row) {
         row.identification_fit_percent = Some(identification_fit_percent(robot, path)?);
     }
     row.validation_s = began.elapsed().as_secs_f64();
     Ok(row)
+}
+
+/// Whether the gate's flap bar reads the validation's own cruise starts.
+fn reads_flap_on_validation(gate: &Gate) -> bool {
+    gate.cruise_flap_hz.is_some() && gate.cruise_flap_flight == CruiseFlapFlight::ValidationStarts
 }
 
 /// Picks the stage's checkpoint, or stops the run when no checkpoint met the gate. The identification
@@ -911,6 +926,7 @@ pub fn describe_gate(gate: &Gate) -> String {
         let flight = match gate.cruise_flap_flight {
             CruiseFlapFlight::LongitudinalSegment => "in its cruise segment",
             CruiseFlapFlight::CruiseReference => "along the cruise reference",
+            CruiseFlapFlight::ValidationStarts => "along the cruise reference, averaged over the validation's starts,",
         };
         flight_mode_bars.push(format!("the flap's fundamental {flight} within {low}-{high} Hz"));
     }
@@ -1064,13 +1080,21 @@ mod tests {
         // Cruise `completed` of 10 at `rms`, longitudinal under the fluid coefficients `fluid` of 100.
         let row = |iteration: usize, completed: usize, rms: f64, fluid: usize| {
             let references = vec![
-                ReferenceScore { name: "cruise".into(), completed, episodes: 10, mean_rms_m: rms, energy_ratio: None },
+                ReferenceScore {
+                    name: "cruise".into(),
+                    completed,
+                    episodes: 10,
+                    mean_rms_m: rms,
+                    energy_ratio: None,
+                    flap_hz: None,
+                },
                 ReferenceScore {
                     name: "longitudinal~fluid".into(),
                     completed: fluid,
                     episodes: 100,
                     mean_rms_m: 0.3,
                     energy_ratio: None,
+                    flap_hz: None,
                 },
             ];
             let completed_percent = 100.0 * (completed + fluid) as f64 / 110.0;

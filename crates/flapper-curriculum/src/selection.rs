@@ -105,6 +105,7 @@ impl Selection {
                         episodes,
                         mean_rms_m: number(FIXED.len() + 3 * k + 2)?,
                         energy_ratio,
+                        flap_hz: None,
                     })
                 })
                 .collect::<Result<Vec<_>, SelectionError>>()?;
@@ -511,6 +512,7 @@ impl Validated {
             episodes: 10,
             mean_rms_m: rms,
             energy_ratio: None,
+            flap_hz: None,
         }];
         let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
         Validated {
@@ -602,6 +604,7 @@ mod tests {
                 episodes: 10,
                 mean_rms_m: 0.2,
                 energy_ratio: longitudinal,
+                flap_hz: None,
             });
             Validated {
                 modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio: exact, cruise_flap_hz: 5.0 }),

@@ -12,6 +12,7 @@ use flapper_analysis::frontier;
 use flapper_eval::tracking::{
     EpisodeResult, TrackingController, evaluate_tracking, evaluate_tracking_randomized, mean_energy_per_metre_j,
 };
+use flapper_eval::tracking_report::{ANALYSED_JOINTS, TrackingSummary};
 use flapper_eval::{PolicyFileError, ScriptedGaitConfig, load_flight_policy};
 use flapper_sim::{ModelError, RobotModel};
 use flapper_task::TaskConfig;
@@ -38,6 +39,10 @@ pub enum ValidationError {
     FlightModes(String),
 }
 
+/// Where the left flap sits among `flapper eval`'s analysed joints.
+const FLAP_LEFT: usize = 0;
+const _: () = assert!(matches!(ANALYSED_JOINTS[FLAP_LEFT], flapper_sim::ActuatedJoint::FlapLeft));
+
 /// How the drawn references of a validation set are named: `procedural-1`, `procedural-2`, ...
 pub const PROCEDURAL_PREFIX: &str = "procedural-";
 
@@ -56,6 +61,8 @@ pub struct ValidationSet {
     /// The scripted gait's energy per metre (J/m, the mean over the entry's episodes) on the entries whose
     /// energy is priced ([`Self::price_energy`]), by entry name: what a checkpoint's is divided by.
     scripted_energy_per_metre_j: BTreeMap<String, f64>,
+    /// The entry whose flap frequency [`Self::judge`] reads ([`Self::read_flap_on`]).
+    flap_entry: Option<String>,
 }
 
 impl ValidationSet {
@@ -100,7 +107,12 @@ impl ValidationSet {
             reference,
             randomization: None,
         });
-        Ok(Self { entries: nominal.chain(randomized).collect(), seed, scripted_energy_per_metre_j: BTreeMap::new() })
+        Ok(Self {
+            entries: nominal.chain(randomized).collect(),
+            seed,
+            scripted_energy_per_metre_j: BTreeMap::new(),
+            flap_entry: None,
+        })
     }
 
     /// Flies the scripted gait on `names`' entries from the same starts as every checkpoint will, so that
@@ -121,6 +133,20 @@ impl ValidationSet {
             })?;
             let results = self.fly(robot, &scripted, &task, entry)?;
             self.scripted_energy_per_metre_j.insert(name.clone(), mean_energy_per_metre_j(&results, period_s));
+        }
+        Ok(self)
+    }
+
+    /// Has [`Self::judge`] read the flap's fundamental on entry `name` (where given): each start's after
+    /// its first second, averaged over the starts as `flapper eval`'s table averages them.
+    pub fn read_flap_on(mut self, name: Option<&str>) -> Result<Self, ValidationError> {
+        if let Some(name) = name {
+            if !self.entries.iter().any(|e| e.name == name) {
+                return Err(ValidationError::FlightModes(format!(
+                    "the flap frequency is read on '{name}', which is not an entry of the validation set"
+                )));
+            }
+            self.flap_entry = Some(name.to_owned());
         }
         Ok(self)
     }
@@ -159,6 +185,9 @@ impl ValidationSet {
                 let own = mean_energy_per_metre_j(&results, period_s);
                 score.energy_ratio = Some(frontier::energy_ratio(own, scripted).unwrap_or(f64::NAN));
             }
+            if self.flap_entry.as_ref() == Some(&entry.name) {
+                score.flap_hz = Some(TrackingSummary::of(&results, period_s, None).frequency_hz[FLAP_LEFT]);
+            }
             per_reference.push(score);
         }
         Ok(Score::of(per_reference))
@@ -177,6 +206,10 @@ pub struct ReferenceScore {
     /// ([`ValidationSet::price_energy`]); NaN where the scripted gait flew no energy.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy_ratio: Option<f64>,
+    /// The left flap's fundamental (Hz), the mean over the episodes, where the stage reads it here
+    /// ([`ValidationSet::read_flap_on`]); NaN where the wing did not flap.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flap_hz: Option<f64>,
 }
 
 impl ReferenceScore {
@@ -188,6 +221,7 @@ impl ReferenceScore {
             episodes: results.len(),
             mean_rms_m: rms / results.len().max(1) as f64,
             energy_ratio: None,
+            flap_hz: None,
         }
     }
 
@@ -310,6 +344,7 @@ mod tests {
                     episodes,
                     mean_rms_m,
                     energy_ratio: None,
+                    flap_hz: None,
                 })
                 .collect(),
         )
@@ -345,6 +380,7 @@ mod tests {
                     episodes: 10,
                     mean_rms_m,
                     energy_ratio: None,
+                    flap_hz: None,
                 })
                 .to_vec(),
         );
