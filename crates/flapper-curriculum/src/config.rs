@@ -791,7 +791,8 @@ task = { stage = 2 }
         assert!(gate.max_energy_ratio.is_some() && gate.cruise_flap_hz == Some([4.0, 6.0]));
         assert_eq!(c.stages[4].validation, c.stages[3].validation, "judged on stage 4's validation set");
         // The sixth stage: stage 5's task and validation set, the energy priced nearly linearly, every named
-        // reference's energy judged at validation, seed 1's stage 5 keeping its 600-iteration extension.
+        // reference's energy judged at validation, the flap read on the validation's own cruise starts, seed
+        // 1's stage 5 keeping its 600-iteration extension.
         let manoeuvres = c.stage_train_config(6).unwrap();
         assert_eq!(c.stages[5].validation, c.stages[4].validation, "judged on stage 5's validation set");
         assert_eq!((manoeuvres.task.reward.energy_weight, manoeuvres.task.reward.energy_scale_w), (0.3, 100.0));
@@ -800,6 +801,9 @@ task = { stage = 2 }
         let priced = &c.stages[5].gate.reference_max_energy_ratio;
         assert_eq!(priced.len(), 8, "every named reference's energy priced: {priced:?}");
         assert_eq!((priced["longitudinal"], priced["immelmann"]), (1.45, 2.9));
+        let gate = &c.stages[5].gate;
+        assert_eq!(gate.cruise_flap_flight, CruiseFlapFlight::ValidationStarts, "the flap as `flapper eval` reads it");
+        assert!(c.stages[5].validation.references.iter().any(|r| r == CRUISE_ENTRY));
         assert_eq!(c.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 600);
         assert_eq!(c.stage_iterations(6, SEED1_BEFORE_STAGE5 + 1800 * 6144).unwrap(), 550);
         check_budget(&c, "curriculum.toml");
