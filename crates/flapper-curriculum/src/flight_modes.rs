@@ -150,14 +150,7 @@ mod tests {
     fn flown(entries: &[(&str, Option<f64>)]) -> Score {
         let references = entries
             .iter()
-            .map(|&(name, energy_ratio)| ReferenceScore {
-                name: name.into(),
-                completed: 50,
-                episodes: 50,
-                mean_rms_m: 0.2,
-                energy_ratio,
-                flap_hz: None,
-            })
+            .map(|&(name, energy_ratio)| ReferenceScore { energy_ratio, ..ReferenceScore::flown(name, 50, 50, 0.2) })
             .collect();
         Score { completed_percent: 100.0, mean_rms_m: 0.2, references }
     }

@@ -1080,22 +1080,8 @@ mod tests {
         // Cruise `completed` of 10 at `rms`, longitudinal under the fluid coefficients `fluid` of 100.
         let row = |iteration: usize, completed: usize, rms: f64, fluid: usize| {
             let references = vec![
-                ReferenceScore {
-                    name: "cruise".into(),
-                    completed,
-                    episodes: 10,
-                    mean_rms_m: rms,
-                    energy_ratio: None,
-                    flap_hz: None,
-                },
-                ReferenceScore {
-                    name: "longitudinal~fluid".into(),
-                    completed: fluid,
-                    episodes: 100,
-                    mean_rms_m: 0.3,
-                    energy_ratio: None,
-                    flap_hz: None,
-                },
+                ReferenceScore::flown("cruise", completed, 10, rms),
+                ReferenceScore::flown("longitudinal~fluid", fluid, 100, 0.3),
             ];
             let completed_percent = 100.0 * (completed + fluid) as f64 / 110.0;
             let score = Score { completed_percent, mean_rms_m: rms, references };

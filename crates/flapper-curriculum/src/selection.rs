@@ -506,14 +506,7 @@ impl Validated {
     /// A checkpoint that flew one validation reference, cruise, `completed` of 10 with a mean RMS error of
     /// `rms` (tests).
     pub(crate) fn of_cruise(iteration: usize, completed: usize, rms: f64) -> Self {
-        let references = vec![ReferenceScore {
-            name: "cruise".into(),
-            completed,
-            episodes: 10,
-            mean_rms_m: rms,
-            energy_ratio: None,
-            flap_hz: None,
-        }];
+        let references = vec![ReferenceScore::flown("cruise", completed, 10, rms)];
         let score = Score { completed_percent: 10.0 * completed as f64, mean_rms_m: rms, references };
         Validated {
             iteration,
@@ -599,12 +592,8 @@ mod tests {
             let mut row = V::of_cruise(iteration, 10, 0.2);
             row.score.references[0].energy_ratio = cruise;
             row.score.references.push(ReferenceScore {
-                name: "longitudinal".into(),
-                completed: 10,
-                episodes: 10,
-                mean_rms_m: 0.2,
                 energy_ratio: longitudinal,
-                flap_hz: None,
+                ..ReferenceScore::flown("longitudinal", 10, 10, 0.2)
             });
             Validated {
                 modes: Some(ModeFigures { glide_fraction: 0.0, energy_ratio: exact, cruise_flap_hz: 5.0 }),

@@ -229,6 +229,13 @@ impl ReferenceScore {
         100.0 * self.completed as f64 / self.episodes.max(1) as f64
     }
 
+    /// Entry `name` flown `completed` of `episodes` at a mean RMS error of `mean_rms_m`, its energy not priced
+    /// and its flap not read (tests).
+    #[cfg(test)]
+    pub(crate) fn flown(name: &str, completed: usize, episodes: usize, mean_rms_m: f64) -> Self {
+        Self { name: name.to_owned(), completed, episodes, mean_rms_m, energy_ratio: None, flap_hz: None }
+    }
+
     /// Whether this reference was drawn by the procedural generator (not named by the config).
     pub fn is_procedural(&self) -> bool {
         self.name.starts_with(PROCEDURAL_PREFIX)
@@ -338,13 +345,8 @@ mod tests {
             per_reference
                 .iter()
                 .enumerate()
-                .map(|(k, &(completed, episodes, mean_rms_m))| ReferenceScore {
-                    name: format!("{}{k}", names[k]),
-                    completed,
-                    episodes,
-                    mean_rms_m,
-                    energy_ratio: None,
-                    flap_hz: None,
+                .map(|(k, &(completed, episodes, mean_rms_m))| {
+                    ReferenceScore::flown(&format!("{}{k}", names[k]), completed, episodes, mean_rms_m)
                 })
                 .collect(),
         )
@@ -374,14 +376,7 @@ mod tests {
     fn an_entry_with_its_own_rms_bar_is_judged_on_its_own_error() {
         let flown = Score::of(
             [("cruise", 0.1), ("longitudinal", 0.39), ("lateral~table3", 0.8)]
-                .map(|(name, mean_rms_m)| ReferenceScore {
-                    name: name.into(),
-                    completed: 10,
-                    episodes: 10,
-                    mean_rms_m,
-                    energy_ratio: None,
-                    flap_hz: None,
-                })
+                .map(|(name, mean_rms_m)| ReferenceScore::flown(name, 10, 10, mean_rms_m))
                 .to_vec(),
         );
         let bars = |bars: &[(&str, f64)]| Gate {
