@@ -691,10 +691,8 @@ fn judge(
     let began = Instant::now();
     let score = set.judge(robot, path)?;
     // The cruise reference is flown again for the frequency bar only; the validation's starts need no flight.
-    let flap_flight = match gate.cruise_flap_flight {
-        CruiseFlapFlight::CruiseReference if gate.cruise_flap_hz.is_some() => CruiseFlapFlight::CruiseReference,
-        _ => CruiseFlapFlight::LongitudinalSegment,
-    };
+    let flap_flight =
+        if gate.cruise_flap_hz.is_some() { gate.cruise_flap_flight } else { CruiseFlapFlight::LongitudinalSegment };
     let mut modes =
         if gate_asks_flight_modes(gate) { Some(flight_mode_figures(robot, path, flap_flight)?) } else { None };
     if let Some(figures) = modes.as_mut()
