@@ -768,20 +768,28 @@ task = { stage = 2 }
         let c = shipped("curriculum.toml");
         assert_eq!(
             task_stages(&c),
-            [1, 2, 3, 4, 4, 4],
-            "the paper's four stages in order, then the efficient flight and the efficient manoeuvres"
+            [1, 2, 3, 4, 4, 4, 4],
+            "the paper's four stages in order, then the efficient flight, the efficient manoeuvres and the glide"
         );
         assert_eq!(
             path_start_probabilities(&c),
-            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0],
             "stage 3's episodes start along their paths, and no other's"
         );
         let restarts: Vec<Option<f32>> = c.stages.iter().map(|s| s.restart_noise_std).collect();
-        assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None, None], "stalled, stages 3 and 4 restart");
+        assert_eq!(restarts, [None, None, Some(0.4), Some(0.4), None, None, None], "stalled, stages 3 and 4 restart");
         let optional: Vec<bool> = c.stages.iter().map(|s| s.optional).collect();
-        assert_eq!(optional, [false, false, false, false, true, true], "a missed refinement leaves the one before");
+        assert_eq!(
+            optional,
+            [false, false, false, false, true, true, true],
+            "a missed refinement leaves the one before"
+        );
         let rms_sought: Vec<bool> = c.stages.iter().map(|s| s.gate.rms_sought).collect();
-        assert_eq!(rms_sought, [false, true, false, true, false, false], "stages 2 and 4 hand over one that completes");
+        assert_eq!(
+            rms_sought,
+            [false, true, false, true, false, false, false],
+            "stages 2 and 4 hand over one that completes"
+        );
         assert!(!c.stages[3].gate.reference_max_rms_m.is_empty(), "with its RMS bars");
         assert_eq!(c.stages[3].as_trained(), c.stages[3].as_trained().as_trained(), "as trained: idempotent");
         assert!(!c.stages[3].as_trained().gate.rms_sought, "decided at the budget's end: not part of training");
@@ -791,8 +799,7 @@ task = { stage = 2 }
         assert!(gate.max_energy_ratio.is_some() && gate.cruise_flap_hz == Some([4.0, 6.0]));
         assert_eq!(c.stages[4].validation, c.stages[3].validation, "judged on stage 4's validation set");
         // The sixth stage: stage 5's task and validation set, the energy priced nearly linearly, every named
-        // reference's energy judged at validation, the flap read on the validation's own cruise starts, seed
-        // 1's stage 5 keeping its 600-iteration extension.
+        // reference's energy judged at validation, the flap read on the validation's own cruise starts.
         let manoeuvres = c.stage_train_config(6).unwrap();
         assert_eq!(c.stages[5].validation, c.stages[4].validation, "judged on stage 5's validation set");
         assert_eq!((manoeuvres.task.reward.energy_weight, manoeuvres.task.reward.energy_scale_w), (0.3, 100.0));
@@ -804,8 +811,22 @@ task = { stage = 2 }
         let gate = &c.stages[5].gate;
         assert_eq!(gate.cruise_flap_flight, CruiseFlapFlight::ValidationStarts, "the flap as `flapper eval` reads it");
         assert!(c.stages[5].validation.references.iter().any(|r| r == CRUISE_ENTRY));
-        assert_eq!(c.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 600);
-        assert_eq!(c.stage_iterations(6, SEED1_BEFORE_STAGE5 + 1800 * 6144).unwrap(), 550);
+        // The seventh stage: the sixth's task, price, validation set and gate, with the Euclidean smoothness
+        // weighed x5 on glide slopes, a 0.7 m kernel and the glide in its gate; its 900 reserved iterations
+        // take seed 1's stage 5 extension (600 iterations that handed over the same checkpoint) and leave
+        // it its whole 925 after a sixth stage that stops at 251.
+        let glide = c.stage_train_config(7).unwrap();
+        assert_eq!(c.stages[6].validation, c.stages[5].validation, "judged on the sixth stage's validation set");
+        assert_eq!(c.stages[6].gate, Gate { glide_fraction: Some(0.5), ..c.stages[5].gate.clone() });
+        let (mut unglided, mut sixth) = (glide.task.clone(), manoeuvres.task.clone());
+        (unglided.reward.position_scale_m, unglided.reward.smoothness_glide_gain) = (0.85, 0.0);
+        sixth.reward.smoothness_glide_gain = 0.0;
+        assert_eq!(unglided, sixth, "the sixth stage's task but for the kernel and the glide slopes' smoothness");
+        assert_eq!((glide.task.reward.position_scale_m, glide.task.reward.smoothness_glide_gain), (0.7, 4.0));
+        assert_eq!(glide.ppo.smoothness_norm, flapper_ppo::config::SmoothnessNorm::Euclidean);
+        assert_eq!(c.extension_iterations(5, SEED1_BEFORE_STAGE5, 1200).unwrap(), 0);
+        let seed1_before_glide = SEED1_BEFORE_STAGE5 + (1200 + 251) * 6144;
+        assert_eq!(c.stage_iterations(7, seed1_before_glide).unwrap(), 925);
         check_budget(&c, "curriculum.toml");
     }
 
@@ -852,10 +873,10 @@ task = { stage = 2 }
     fn the_experiments_build_on_the_shipped_curriculum_and_read() {
         // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
         // each one's section): stages 1-4 are the shipped ones by construction (the ones run before the
-        // fifth stage shipped leave it out, and every one the sixth), and each must still read and check after
-        // any change to the curriculum it builds on.
-        let six = shipped("curriculum.toml");
-        let five = CurriculumConfig { stages: six.stages[..5].to_vec(), ..six.clone() };
+        // fifth stage shipped leave it out, and every one the sixth and the seventh), and each must still read
+        // and check after any change to the curriculum it builds on.
+        let seven = shipped("curriculum.toml");
+        let five = CurriculumConfig { stages: seven.stages[..5].to_vec(), ..seven.clone() };
         let four = CurriculumConfig { stages: five.stages[..4].to_vec(), ..five.clone() };
         let flight_modes = shipped("experiments/curriculum-flight-modes.toml");
         assert_eq!(task_stages(&flight_modes), [1, 2, 3, 4, 4]);

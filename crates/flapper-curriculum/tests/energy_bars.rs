@@ -43,7 +43,7 @@ fn a_priced_entry_reads_the_energy_ratio_flapper_eval_prints_and_the_others_none
     let scripted = mean_j_per_m(TrackingController::Scripted(ScriptedGaitConfig::default()), &TaskConfig::default());
     let ratio = score.reference("immelmann").unwrap().energy_ratio.expect("the Immelmann is priced");
     assert!((ratio - own / scripted).abs() < 1e-12, "the gate reads {ratio}, the evaluation {}", own / scripted);
-    // 100 starts, seed 11: 3.02 x (docs/experiments.md, "The Immelmann's energy").
+    // 100 starts, seed 11: 2.47 x (policies/final/README.md).
     assert!(ratio > 2.0 && ratio < 4.5, "the shipped controller's Immelmann at {ratio:.2} x");
     assert_eq!(score.reference("cruise").unwrap().energy_ratio, None, "cruise is not priced");
 }

@@ -36,7 +36,7 @@ fn the_flap_read_on_the_validation_starts_is_flapper_evals_and_only_on_the_entry
     let printed = TrackingSummary::of(&results, period_s, None).frequency_hz[0];
     let read = score.reference("cruise").unwrap().flap_hz.expect("the flap is read on cruise");
     assert_eq!(read.to_bits(), printed.to_bits(), "the gate reads {read} Hz, the evaluation prints {printed} Hz");
-    // 100 starts, seed 11: 5.74 Hz (policies/final/README.md); a flap, not a wing held or a harmonic.
+    // 100 starts, seed 11: 4.97 Hz (policies/final/README.md); a flap, not a wing held or a harmonic.
     assert!((4.0..8.0).contains(&read), "the shipped controller's cruise flap at {read:.2} Hz");
     assert_eq!(score.reference("lateral").unwrap().flap_hz, None, "lateral's flap is not read");
 

@@ -61,7 +61,7 @@ def test_onnx_export_is_valid_and_gives_flappers_actions_on_a_real_flight(flight
     assert float(meta["control_rate_hz"]) == 50.0 and float(meta["filter_cutoff_hz"]) == 7.0
     # The facts of the policy file itself (its .json beside it, written by training).
     facts = json.loads((ROOT / (FINAL + ".json")).read_text())
-    # The final controller's sixth stage trained with passive feathering: the twist travels with the export.
+    # The final controller's last two stages trained with passive feathering: the twist travels with the export.
     trained_twist = float(re.search(r"\npassive_feathering_s = (\S+)\n", facts["config_toml"]).group(1))
     assert float(meta["passive_feathering_s"]) == trained_twist == 0.01
     assert meta["training_env_steps"] == str(facts["env_steps"]) and meta["source_kind"] == "policy"

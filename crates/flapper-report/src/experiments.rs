@@ -162,8 +162,9 @@ pub fn robustness(
 /// The controllers the energy frontier measures, with their names: the report's own policy (`policy`)
 /// by its file where it is not one of the shipped ones below (which it is measured as otherwise), the final
 /// controller, every `policies/experiments/NAME/policy.safetensors` (by folder name, in name order), the
-/// previous final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic)
-/// and the previous stage-4 lineage (`policies/history/stage4`) where they are there.
+/// six-stage final controller before it (`policies/history/six-stages`, which never glides), the previous
+/// final controller (`policies/history/previous-final`, trained with the CPU-dependent arithmetic) and the
+/// previous stage-4 lineage (`policies/history/stage4`) where they are there.
 pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
     let mut shipped = vec![("final".to_owned(), shipped_file(FINAL_POLICY))];
     let mut experiments: Vec<(String, PathBuf)> = std::fs::read_dir(shipped_file(FRONTIER_EXPERIMENTS))
@@ -175,9 +176,11 @@ pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
         .collect();
     experiments.sort();
     shipped.extend(experiments);
-    for (label, file) in
-        [("previous final", FRONTIER_PREVIOUS_FINAL), ("previous stage-4 lineage", FRONTIER_PREVIOUS_STAGE4)]
-    {
+    for (label, file) in [
+        ("six stages", FRONTIER_SIX_STAGES),
+        ("previous final", FRONTIER_PREVIOUS_FINAL),
+        ("previous stage-4 lineage", FRONTIER_PREVIOUS_STAGE4),
+    ] {
         let path = shipped_file(file);
         if path.is_file() {
             shipped.push((label.to_owned(), path));
@@ -195,6 +198,7 @@ pub fn frontier_policies(policy: &Path) -> Vec<(String, PathBuf)> {
 
 /// Where [`frontier_policies`] looks, from the repository's root.
 const FRONTIER_EXPERIMENTS: &str = "policies/experiments";
+const FRONTIER_SIX_STAGES: &str = "policies/history/six-stages/policy.safetensors";
 const FRONTIER_PREVIOUS_FINAL: &str = "policies/history/previous-final/policy.safetensors";
 const FRONTIER_PREVIOUS_STAGE4: &str = "policies/history/stage4/policy.safetensors";
 /// Points measured in experiments, drawn beside the report's own.

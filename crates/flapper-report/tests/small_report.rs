@@ -137,7 +137,7 @@ fn a_small_report_has_every_figure_and_reads_its_numbers_from_its_files() {
         .collect();
     experiments.sort();
     expected.extend(experiments);
-    expected.extend(["previous final", "previous stage-4 lineage", "scripted gait"].map(String::from));
+    expected.extend(["six stages", "previous final", "previous stage-4 lineage", "scripted gait"].map(String::from));
     assert_eq!(measured, expected);
     let points = flapper_analysis::frontier::file::read_frontier_csv(&root.join("docs/energy-frontier.csv")).unwrap();
     assert_eq!(frontier[measured.len()..], points[..], "the points follow the measured rows");
