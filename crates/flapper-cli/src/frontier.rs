@@ -1,5 +1,5 @@
 //! `flapper frontier`: energy against tracking for several policies and the scripted gait (the
-//! efficient-bird trade-off): a table, frontier.csv and energy_vs_tracking.svg.
+//! efficient-bird trade-off): a table, frontier.csv, energy_vs_tracking.svg and energy_vs_slow_flight.svg.
 
 use std::path::{Path, PathBuf};
 
@@ -33,7 +33,7 @@ pub struct FrontierArgs {
     /// (docs/energy-frontier.csv): drawn apart and copied into frontier.csv.
     #[arg(long, value_name = "FILE")]
     pub points: Option<PathBuf>,
-    /// Output folder (created if needed): frontier.csv, energy_vs_tracking.svg.
+    /// Output folder (created if needed): frontier.csv, energy_vs_tracking.svg, energy_vs_slow_flight.svg.
     #[arg(long, default_value = "run/frontier")]
     pub out: PathBuf,
 }

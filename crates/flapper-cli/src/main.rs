@@ -73,8 +73,8 @@ enum Command {
     Modes(modes::ModesArgs),
     /// Energy against tracking (the efficient-bird trade-off): each policy and the scripted gait on
     /// longitudinal (energy per metre over the scripted gait's on the same starts, RMS error), with the
-    /// glide fraction, the cruise flap frequency and the level 3.0 m/s path; a table, frontier.csv and
-    /// energy_vs_tracking.svg.
+    /// glide fraction, the cruise flap frequency and the level 3.0 m/s path; a table, frontier.csv,
+    /// energy_vs_tracking.svg and energy_vs_slow_flight.svg.
     Frontier(frontier::FrontierArgs),
     /// What straight and level flight costs at each airspeed: the scripted gait's family (frequency,
     /// trim, wing pitch, tail) flown level, the cheapest gait per airspeed, and policies on level paths

@@ -846,6 +846,12 @@ fn frontier_writes_eval_s_figures_on_the_same_starts_and_the_scripted_gait_at_ra
     for label in ["final", "scripted gait"] {
         assert!(svg.lines().any(|line| line.trim() == label), "no point labelled {label}");
     }
+    // Against slow flight, only a controller that holds level 3 m/s in 95% of its episodes has a point: the
+    // final one where it flew both episodes, never the scripted gait (0 of 2).
+    let slow = std::fs::read_to_string(out.join("energy_vs_slow_flight.svg")).unwrap();
+    assert!(!slow.lines().any(|line| line.trim() == "scripted gait"), "the scripted gait falls out of slow flight");
+    let held = final_row.level3_completed == final_row.level3_episodes;
+    assert_eq!(slow.lines().any(|line| line.trim() == "final"), held, "{final_row:?}");
 }
 
 #[test]

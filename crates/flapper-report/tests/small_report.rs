@@ -13,7 +13,7 @@ fn repository() -> PathBuf {
 }
 
 /// The files behind the paper's figures (Fig. 1-3, 5-11), the learning curves and the energy frontier.
-const FIGURES: [&str; 17] = [
+const FIGURES: [&str; 18] = [
     "tracking/cruise/joints.svg",
     "sysid/pole_zero.svg",
     "sysid/bode.svg",
@@ -31,6 +31,7 @@ const FIGURES: [&str; 17] = [
     "training/stage1_learning_curves.svg",
     "training/stage3_learning_curves.svg",
     "frontier/energy_vs_tracking.svg",
+    "frontier/energy_vs_slow_flight.svg",
 ];
 const PICTURES: [&str; 6] = [
     "render/robot.png",

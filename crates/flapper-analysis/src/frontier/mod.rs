@@ -4,7 +4,8 @@
 //! gait's (the energy ratio); beside it the glide fraction of longitudinal's glide segment (as
 //! `flapper modes` measures it), the flap's fundamental in cruise (as `flapper eval` prints it) and the
 //! straight level 3.0 m/s path. Downstream of evaluation and [`crate::modes`]; the report and
-//! `flapper frontier` show it as `frontier.csv` ([`file`]) and `energy_vs_tracking.svg` ([`figure`]).
+//! `flapper frontier` show it as `frontier.csv` ([`file`]), `energy_vs_tracking.svg` and
+//! `energy_vs_slow_flight.svg` ([`figure`]).
 
 pub mod figure;
 pub mod file;
@@ -24,6 +25,10 @@ pub const LEVEL_3_REFERENCE: &str = "examples/level-3.0mps.csv";
 pub const ENERGY_RATIO_BAR: f64 = 1.5;
 /// The tracking bar on longitudinal: a mean RMS position error of at most this (m).
 pub const TRACKING_BAR_M: f64 = 0.3;
+/// The slow-flight bar on the level 3.0 m/s path: a mean RMS position error of at most this (m)...
+pub const SLOW_FLIGHT_BAR_M: f64 = 0.5;
+/// ...with at least this share of its episodes completed.
+pub const SLOW_FLIGHT_COMPLETED_SHARE: f64 = 0.95;
 
 /// One controller's point on the trade-off: a row of `frontier.csv`. A figure not measured (a flight
 /// that did not complete for the glide fraction, a point measured elsewhere without it) is `None`,
@@ -102,19 +107,22 @@ impl Frontier {
     }
 }
 
-/// Writes `frontier.csv` (the measured rows, then `points`, rows measured elsewhere) and
-/// `energy_vs_tracking.svg` into `dir`; returns their paths.
+/// Writes `frontier.csv` (the measured rows, then `points`, rows measured elsewhere),
+/// `energy_vs_tracking.svg` and `energy_vs_slow_flight.svg` into `dir`; returns their paths.
 pub fn write_frontier_files(
     dir: &std::path::Path,
     frontier: &Frontier,
     points: &[FrontierRow],
-) -> Result<[std::path::PathBuf; 2], crate::AnalysisError> {
+) -> Result<[std::path::PathBuf; 3], crate::AnalysisError> {
     let csv = dir.join(file::FRONTIER_CSV);
     file::write_frontier_csv(&csv, frontier.rows().chain(points))?;
-    let svg = dir.join(figure::FRONTIER_SVG);
-    figure::draw_frontier(&svg, frontier, points)
-        .map_err(|message| crate::AnalysisError::Write { path: svg.clone(), message })?;
-    Ok([csv, svg])
+    let draw = |axis: figure::TrackingAxis| {
+        let svg = dir.join(axis.file_name());
+        figure::draw_frontier(&svg, frontier, points, axis)
+            .map_err(|message| crate::AnalysisError::Write { path: svg.clone(), message })?;
+        Ok::<_, crate::AnalysisError>(svg)
+    };
+    Ok([csv, draw(figure::TrackingAxis::Longitudinal)?, draw(figure::TrackingAxis::SlowFlight)?])
 }
 
 /// The printed table of `rows` (the CLI's and the report page's): a header and a row of cells each, "-"
