@@ -18,11 +18,7 @@ import csv
 import sys
 from pathlib import Path
 
-ENERGY_BAR = 1.5
-GLIDE_BAR = 0.5
-FLAP_BAND_HZ = (4.0, 6.0)
-LEVEL3_RMS_BAR_M = 0.5
-LEVEL3_COMPLETED_BAR = 0.95
+from flapper_outputs import frontier_bars_met, level3_held
 
 SETS = [("1", "energy"), ("2", "glide"), ("3", "flap"), ("1+2", "energy glide"), ("1+3", "energy flap"),
         ("1+2+3", "energy glide flap"), ("5", "level3"), ("1+5", "energy level3"), ("2+5", "glide level3"),
@@ -41,16 +37,8 @@ def judge(row):
     """The bars one frontier.csv row meets, and its level-3 m/s figures."""
     energy, glide, flap = number(row.get("energy_ratio")), number(row.get("glide_fraction")), number(row.get("cruise_flap_hz"))
     rms, completed, episodes = (number(row.get(k)) for k in ("level3_rms_m", "level3_completed", "level3_episodes"))
-    holds_level3 = completed is not None and bool(episodes) and completed / episodes >= LEVEL3_COMPLETED_BAR
-    met = set()
-    if energy is not None and energy <= ENERGY_BAR:
-        met.add("energy")
-    if glide is not None and glide >= GLIDE_BAR:
-        met.add("glide")
-    if flap is not None and FLAP_BAND_HZ[0] <= flap <= FLAP_BAND_HZ[1]:
-        met.add("flap")
-    if holds_level3 and rms is not None and rms <= LEVEL3_RMS_BAR_M:
-        met.add("level3")
+    holds_level3 = level3_held(completed, episodes)
+    met = frontier_bars_met(energy, glide, flap, (completed, episodes, rms))
     return {"label": row.get("label", ""), "met": met, "energy": energy, "glide": glide, "flap": flap,
             "level3_rms": rms if holds_level3 else None}
 

@@ -364,7 +364,10 @@ fn tracking(results: &RunResults) -> Section {
 
 /// The efficient-bird trade-off: energy against tracking for every shipped controller.
 fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
-    use flapper_analysis::frontier::{ENERGY_RATIO_BAR, SLOW_FLIGHT_BAR_M, TRACKING_BAR_M};
+    use flapper_analysis::frontier::figure::{FRONTIER_SVG, SLOW_FLIGHT_SVG};
+    use flapper_analysis::frontier::{
+        ENERGY_RATIO_BAR, SLOW_FLIGHT_BAR_M, SLOW_FLIGHT_COMPLETED_SHARE, TRACKING_BAR_M,
+    };
     let caption = format!(
         "Energy against tracking on the longitudinal reference, one point per controller: the energy per metre \
          (absolute mechanical work over the distance flown) over the scripted gait's on the same randomized starts \
@@ -380,13 +383,14 @@ fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
     );
     let slow_caption = format!(
         "The same energy against slow flight: the level 3.0 m/s path's mean RMS position error, for every \
-         controller that completes it in at least 95% of its episodes (the efficient-bird issue's bar 5: at most \
+         controller that completes it in at least {:.0}% of its episodes (the efficient-bird issue's bar 5: at most \
          {SLOW_FLIGHT_BAR_M} m). A controller that flies slowly and efficiently lies below and left of the dashed \
-         lines; `scripts/frontier-bars.py frontier/frontier.csv` lists which rows meet which bars."
+         lines; `scripts/frontier-bars.py frontier/frontier.csv` lists which rows meet which bars.",
+        SLOW_FLIGHT_COMPLETED_SHARE * 100.0
     );
     let mut blocks = vec![
-        figure(&caption, "frontier/energy_vs_tracking.svg"),
-        figure(&slow_caption, "frontier/energy_vs_slow_flight.svg"),
+        figure(&caption, &format!("frontier/{FRONTIER_SVG}")),
+        figure(&slow_caption, &format!("frontier/{SLOW_FLIGHT_SVG}")),
     ];
     let rows = results.frontier.as_deref().unwrap_or_default();
     let (mut header, cells) = flapper_analysis::frontier::table(rows);
