@@ -872,9 +872,9 @@ task = { stage = 2 }
     #[test]
     fn the_experiments_build_on_the_shipped_curriculum_and_read() {
         // configs/experiments/curriculum-*.toml extend configs/curriculum.toml (docs/experiments.md has
-        // each one's section): stages 1-4 are the shipped ones by construction (the ones run before the
-        // fifth stage shipped leave it out, and every one the sixth and the seventh), and each must still read
-        // and check after any change to the curriculum it builds on.
+        // each one's section): stages 1-4 are the shipped ones by construction (each keeps the shipped
+        // stages through the last one it ran on, `stages_through`), and each must still read and check
+        // after any change to the curriculum it builds on.
         let seven = shipped("curriculum.toml");
         let five = CurriculumConfig { stages: seven.stages[..5].to_vec(), ..seven.clone() };
         let four = CurriculumConfig { stages: five.stages[..4].to_vec(), ..five.clone() };
@@ -1174,6 +1174,15 @@ task = { stage = 3 }
         let names: Vec<&str> = fewer.stages.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["cruise", "climb and dive", "last"]);
         assert!(fewer.stages[1] == c.stages[2] && fewer.stages[2] == c.stages[3]);
+        // The base's stages through one of them: a stage the base gains later stays out of the
+        // experiment, and the entries apply to what is kept.
+        let through = "extends = \"more.toml\"\nstages_through = \"first again\"\n[[stages]]\nmodify = \"cruise\"\nmax_iterations = 9\n";
+        std::fs::write(dir.join("experiments/through.toml"), through).unwrap();
+        let through = CurriculumConfig::load(&dir.join("experiments/through.toml")).unwrap();
+        let names: Vec<&str> = through.stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["cruise", "first again"]);
+        assert_eq!((through.stages[0].max_iterations, &through.stages[1]), (9, &c.stages[1]));
+        assert!(!through.to_toml().contains("stages_through"), "a run saves the stages, not the key");
     }
 
     #[test]
@@ -1211,6 +1220,11 @@ task = { stage = 3 }
         );
         let e = CurriculumConfig::load(&dir.join("experiments/x.toml")).unwrap_err().to_string();
         assert!(e.contains("base.toml': stages must be a list of [[stages]] tables, got 5"), "{e}");
+        let e = refused("through", "extends = \"../base.toml\"\nstages_through = \"crusie\"\n");
+        assert!(e.contains("x.toml': stages_through = 'crusie' names no stage of '../base.toml'"), "{e}");
+        assert!(e.contains("'cruise', 'climb and dive'") && !e.contains("entry"), "{e}");
+        let e = refused("through-number", "extends = \"../base.toml\"\nstages_through = 2\n");
+        assert!(e.contains("stages_through must be a stage name, got 2"), "{e}");
         let e = refused("circle", "extends = \"x.toml\"\n");
         assert!(e.contains("extends 'x.toml', which extends it again"), "{e}");
         let e =

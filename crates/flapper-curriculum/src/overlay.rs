@@ -3,6 +3,8 @@
 //!
 //! ```toml
 //! extends = "../curriculum.toml"   # relative to this file; that file may extend another in turn
+//! stages_through = "efficient flight"  # the base's stages up to this one only (optional): stages
+//!                                  # shipped later are left out, so the experiment keeps what it ran on
 //! seed = 4                         # a key given here replaces the base's; tables merge key by key
 //!
 //! [[stages]]
@@ -38,7 +40,8 @@ pub enum OverlayError {
     #[error("curriculum config '{path}': extends '{base}', which extends it again ({chain})")]
     Circle { path: String, base: String, chain: String },
     #[error(
-        "curriculum config '{path}': [[stages]] entry {entry}: {key} = '{stage}' names no stage of '{base}' (its stages: {known})"
+        "curriculum config '{path}': {place}{key} = '{stage}' names no stage of '{base}' (its stages: {known})",
+        place = entry_place(*.entry)
     )]
     UnknownStage { path: String, entry: usize, key: &'static str, stage: String, base: String, known: String },
     #[error(
@@ -49,8 +52,16 @@ pub enum OverlayError {
     BadEntry { path: String, entry: usize, message: String },
 }
 
+/// Where in a file an error's key is: its `[[stages]]` entry (counted from 1), or nothing for 0 (a
+/// top-level key).
+fn entry_place(entry: usize) -> String {
+    if entry == 0 { String::new() } else { format!("[[stages]] entry {entry}: ") }
+}
+
 /// The key that names the file a curriculum builds on.
 pub const EXTENDS: &str = "extends";
+/// The key that keeps the base's stages up to and including the one it names, before the entries.
+pub const STAGES_THROUGH: &str = "stages_through";
 
 /// Whether a parsed curriculum file builds on another.
 pub fn extends_another(file: &Table) -> bool {
@@ -88,6 +99,14 @@ fn resolve_chain(path: &Path, mut file: Table, seen: &mut Vec<PathBuf>) -> Resul
         message: e.to_string(),
     })?;
     let mut base = resolve_chain(&base_path, base_file, seen)?;
+    let through = match file.remove(STAGES_THROUGH) {
+        None => None,
+        Some(Value::String(stage)) => Some(stage),
+        Some(other) => {
+            let message = format!("{STAGES_THROUGH} must be a stage name, got {other}");
+            return Err(OverlayError::Parse { path: shown, message });
+        }
+    };
     let entries = stage_list(file.remove("stages"), &shown)?;
     merge(&mut base, file);
     let base_shown = base_path.display().to_string();
@@ -99,6 +118,10 @@ fn resolve_chain(path: &Path, mut file: Table, seen: &mut Vec<PathBuf>) -> Resul
         })
         .collect::<Result<_, _>>()?;
     let names = Names { path: &shown, base: &base_name };
+    if let Some(stage) = through {
+        let at = find_stage(&stages, STAGES_THROUGH, &stage, 0, &names)?;
+        stages.truncate(at + 1);
+    }
     for (index, entry) in entries.into_iter().enumerate() {
         edit_stages(&mut stages, entry, index + 1, &names)?;
     }
@@ -138,6 +161,29 @@ struct Names<'a> {
     base: &'a str,
 }
 
+/// Where the stage named `stage` is among `stages`, or the error naming `key` (with the `[[stages]]`
+/// entry `number` it is in, or none for 0: a top-level key) and listing the stages there are.
+fn find_stage(
+    stages: &[Table],
+    key: &'static str,
+    stage: &str,
+    number: usize,
+    names: &Names,
+) -> Result<usize, OverlayError> {
+    stages.iter().position(|s| s.get("name").and_then(Value::as_str) == Some(stage)).ok_or_else(|| {
+        let known: Vec<String> =
+            stages.iter().filter_map(|s| s.get("name").and_then(Value::as_str)).map(|n| format!("'{n}'")).collect();
+        OverlayError::UnknownStage {
+            path: names.path.to_owned(),
+            entry: number,
+            key,
+            stage: stage.to_owned(),
+            base: names.base.to_owned(),
+            known: known.join(", "),
+        }
+    })
+}
+
 /// One `[[stages]]` entry of an extending file applied to the stages so far.
 fn edit_stages(stages: &mut Vec<Table>, entry: Value, number: usize, names: &Names) -> Result<(), OverlayError> {
     let bad = |message: String| OverlayError::BadEntry { path: names.path.to_owned(), entry: number, message };
@@ -148,20 +194,7 @@ fn edit_stages(stages: &mut Vec<Table>, entry: Value, number: usize, names: &Nam
         Some(other) => Err(bad(format!("{key} must be a stage name, got {other}"))),
     };
     let (modify, from, after, remove) = (take("modify")?, take("from")?, take("after")?, take("remove")?);
-    let find = |key: &'static str, stage: &str| {
-        stages.iter().position(|s| s.get("name").and_then(Value::as_str) == Some(stage)).ok_or_else(|| {
-            let known: Vec<String> =
-                stages.iter().filter_map(|s| s.get("name").and_then(Value::as_str)).map(|n| format!("'{n}'")).collect();
-            OverlayError::UnknownStage {
-                path: names.path.to_owned(),
-                entry: number,
-                key,
-                stage: stage.to_owned(),
-                base: names.base.to_owned(),
-                known: known.join(", "),
-            }
-        })
-    };
+    let find = |key: &'static str, stage: &str| find_stage(stages, key, stage, number, names);
     if let Some(stage) = remove {
         if modify.is_some() || from.is_some() || after.is_some() || !entry.is_empty() {
             return Err(bad(format!("remove = '{stage}' leaves a stage out and takes no other key")));

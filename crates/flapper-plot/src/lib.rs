@@ -8,7 +8,7 @@ pub use flapper_files::write_atomically;
 
 mod scatter;
 
-pub use scatter::{Guide, LabelledPoint, PointGroup, Scatter, draw_scatter};
+pub use scatter::{Guide, LabelledPoint, Labels, PointGroup, Scatter, draw_scatter};
 
 use std::path::Path;
 

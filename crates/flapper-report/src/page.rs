@@ -374,7 +374,9 @@ fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
          (so the scripted gait sits at 1, the lower dashed line), against the mean RMS position error. Filled: \
          measured by this run ({} starts, seed {}: `flapper frontier` on this report's controller ({}), the \
          shipped final one, every policies/experiments controller and the previous ones); rings: measured in experiments \
-         (docs/energy-frontier.csv, each row's source names the command). The other dashed lines are the \
+         (docs/energy-frontier.csv, each row's source names the command), red where they meet the three flight bars \
+         at once (energy, glide, a 4-6 Hz flap) and named only where the name fits (frontier/frontier.csv names \
+         every one). The other dashed lines are the \
          efficient-bird bars: at most {ENERGY_RATIO_BAR} x the scripted gait's energy and at most {TRACKING_BAR_M} m \
          RMS error; a controller that meets both lies below and left of them.",
         settings.episodes,

@@ -1,15 +1,19 @@
-//! The trade-off's figures, a labelled point per controller with the efficient-bird bars drawn: the
-//! energy ratio against longitudinal's RMS error (`energy_vs_tracking.svg`), and against the level 3.0 m/s
-//! path's (`energy_vs_slow_flight.svg`: the frontier between slow flight and the efficient bird).
+//! The trade-off's figures, a point per controller with the efficient-bird bars drawn: the energy ratio
+//! against longitudinal's RMS error (`energy_vs_tracking.svg`), and against the level 3.0 m/s path's
+//! (`energy_vs_slow_flight.svg`: the frontier between slow flight and the efficient bird). The
+//! controllers measured by the run are labelled; the experiments' points (a cloud of a hundred and more)
+//! are coloured by whether they meet the three flight bars and labelled only where a label fits, the
+//! CSV beside the figure naming every one.
 
 use std::path::Path;
 
-use flapper_plot::{COLORS, Guide, LabelledPoint, PointGroup, Scatter};
+use flapper_plot::{COLORS, Guide, LabelledPoint, Labels, PointGroup, Scatter};
 
 use super::{
-    ENERGY_RATIO_BAR, ENERGY_REFERENCE, Frontier, FrontierRow, SLOW_FLIGHT_BAR_M, SLOW_FLIGHT_COMPLETED_SHARE,
-    TRACKING_BAR_M,
+    CRUISE_FLAP_BAND_HZ, ENERGY_RATIO_BAR, ENERGY_REFERENCE, Frontier, FrontierRow, SLOW_FLIGHT_BAR_M,
+    SLOW_FLIGHT_COMPLETED_SHARE, TRACKING_BAR_M,
 };
+use crate::modes::GLIDING_SEGMENT_FRACTION;
 
 /// The figure of energy against longitudinal's tracking.
 pub const FRONTIER_SVG: &str = "energy_vs_tracking.svg";
@@ -48,9 +52,11 @@ impl TrackingAxis {
     }
 }
 
-/// Draws `frontier` (filled: the policies and the scripted gait, measured by the run) and `points`
-/// (rings: measured in experiments, as their `source` says) into `path`, the energy ratio against
-/// `axis`'s error. A row without both is left out of the figure (it stays in the CSV).
+/// Draws `frontier` (filled: the policies and the scripted gait, measured by the run, each labelled)
+/// and `points` (rings: measured in experiments, as their `source` says; those meeting the three flight
+/// bars, [`FrontierRow::meets_flight_bars`], in a colour of their own and labelled first) into `path`,
+/// the energy ratio against `axis`'s error. A row without both is left out of the figure (it stays in
+/// the CSV).
 pub fn draw_frontier(
     path: &Path,
     frontier: &Frontier,
@@ -66,22 +72,34 @@ pub fn draw_frontier(
             legend: "measured here".into(),
             color: COLORS[0],
             filled: true,
+            labels: Labels::Every,
             points: labelled(&mut frontier.policies.iter()),
         },
         PointGroup {
             legend: "scripted gait (ratio 1 by definition)".into(),
             color: COLORS[2],
             filled: true,
+            labels: Labels::Every,
             points: labelled(&mut std::iter::once(&frontier.scripted)),
         },
     ];
-    if !points.is_empty() {
-        groups.push(PointGroup {
-            legend: "measured in experiments".into(),
-            color: COLORS[3],
-            filled: false,
-            points: labelled(&mut points.iter()),
-        });
+    let (low_hz, high_hz) = CRUISE_FLAP_BAND_HZ;
+    let experiments = [
+        (
+            true,
+            format!(
+                "experiments meeting the flight bars (energy, glide {GLIDING_SEGMENT_FRACTION}, flap {low_hz}-{high_hz} Hz)"
+            ),
+            COLORS[1],
+        ),
+        (false, "other experiments (labelled where room; every one in frontier.csv)".to_string(), COLORS[3]),
+    ];
+    for (meeting, legend, color) in experiments {
+        let mut rows = points.iter().filter(|r| r.meets_flight_bars() == meeting);
+        let points = labelled(&mut rows);
+        if !points.is_empty() {
+            groups.push(PointGroup { legend, color, filled: false, labels: Labels::WhereTheyFit, points });
+        }
     }
     let (runs, seed) = (frontier.episodes, frontier.seed);
     let (title, x_label, error_bar) = match axis {
@@ -140,5 +158,21 @@ mod tests {
         assert_eq!(TrackingAxis::SlowFlight.error_m(&row(0, 0, 0.4)), None, "no episodes, no point");
         assert_eq!(TrackingAxis::SlowFlight.error_m(&FrontierRow::default()), None, "not measured");
         assert_eq!(TrackingAxis::Longitudinal.error_m(&row(0, 100, 0.4)), Some(0.2), "longitudinal's own");
+    }
+
+    #[test]
+    fn the_flight_bars_ask_energy_glide_and_flap_together() {
+        let bird = FrontierRow {
+            energy_ratio: Some(1.5),
+            glide_fraction: Some(0.5),
+            cruise_flap_hz: Some(6.0),
+            ..row(0, 0, 0.0)
+        };
+        assert!(bird.meets_flight_bars(), "each bar met at its edge");
+        assert!(!FrontierRow { energy_ratio: Some(1.51), ..bird.clone() }.meets_flight_bars(), "energy");
+        assert!(!FrontierRow { glide_fraction: Some(0.49), ..bird.clone() }.meets_flight_bars(), "glide");
+        assert!(!FrontierRow { cruise_flap_hz: Some(3.99), ..bird.clone() }.meets_flight_bars(), "flap below 4 Hz");
+        assert!(!FrontierRow { cruise_flap_hz: Some(6.01), ..bird.clone() }.meets_flight_bars(), "flap above 6 Hz");
+        assert!(!FrontierRow { glide_fraction: None, ..bird.clone() }.meets_flight_bars(), "not measured");
     }
 }

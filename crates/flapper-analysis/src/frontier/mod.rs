@@ -29,6 +29,8 @@ pub const TRACKING_BAR_M: f64 = 0.3;
 pub const SLOW_FLIGHT_BAR_M: f64 = 0.5;
 /// ...with at least this share of its episodes completed.
 pub const SLOW_FLIGHT_COMPLETED_SHARE: f64 = 0.95;
+/// The flap frequencies of the paper's cruise, "4-6 Hz" (Hz): the efficient bird's flap bar.
+pub const CRUISE_FLAP_BAND_HZ: (f64, f64) = (4.0, 6.0);
 
 /// One controller's point on the trade-off: a row of `frontier.csv`. A figure not measured (a flight
 /// that did not complete for the glide fraction, a point measured elsewhere without it) is `None`,
@@ -68,6 +70,19 @@ pub struct FrontierRow {
     pub level3_episodes: Option<usize>,
     /// The command that measured the row (with its episodes and seed, and where it ran if it matters).
     pub source: String,
+}
+
+impl FrontierRow {
+    /// Whether the row meets the efficient bird's three flight bars at once: at most
+    /// [`ENERGY_RATIO_BAR`] times the scripted gait's energy per metre, the wings held through at least
+    /// [`crate::modes::GLIDING_SEGMENT_FRACTION`] of the glide segment, and a cruise flap within
+    /// [`CRUISE_FLAP_BAND_HZ`]. A figure not measured meets nothing.
+    pub fn meets_flight_bars(&self) -> bool {
+        let (low, high) = CRUISE_FLAP_BAND_HZ;
+        self.energy_ratio.is_some_and(|ratio| ratio <= ENERGY_RATIO_BAR)
+            && self.glide_fraction.is_some_and(|glide| glide >= crate::modes::GLIDING_SEGMENT_FRACTION)
+            && self.cruise_flap_hz.is_some_and(|hz| (low..=high).contains(&hz))
+    }
 }
 
 /// The columns of `frontier.csv`, in [`FrontierRow`]'s order (a test keeps them in step).
