@@ -125,10 +125,9 @@ fn text_width_px(text: &str) -> i32 {
 /// first of a few places around the point (on its right above or below, the side `below_first` says
 /// first, then the same on its left, then further up or down on either side: an optional label only
 /// the first four) whose box stays in `area` and clears every point, every label placed before it and
-/// the boxes `taken`. A label that
-/// `must_show` and finds no such place takes the first place that clears the labels and the other
-/// must-show points only (it may lie over a cloud of optional points), and failing that its first
-/// place; any other label without a place is left out (`None`).
+/// the boxes `taken`. A label that `must_show` and finds no such place takes the first place that
+/// clears the labels and the other must-show points only (it may lie over a cloud of optional points),
+/// and failing that its first place; any other label without a place is left out (`None`).
 fn place_labels(
     points_px: &[(i32, i32)],
     widths_px: &[i32],
