@@ -366,8 +366,9 @@ fn tracking(results: &RunResults) -> Section {
 fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
     use flapper_analysis::frontier::figure::{FRONTIER_SVG, SLOW_FLIGHT_SVG};
     use flapper_analysis::frontier::{
-        ENERGY_RATIO_BAR, SLOW_FLIGHT_BAR_M, SLOW_FLIGHT_COMPLETED_SHARE, TRACKING_BAR_M,
+        CRUISE_FLAP_BAND_HZ, ENERGY_RATIO_BAR, SLOW_FLIGHT_BAR_M, SLOW_FLIGHT_COMPLETED_SHARE, TRACKING_BAR_M,
     };
+    let (low_hz, high_hz) = CRUISE_FLAP_BAND_HZ;
     let caption = format!(
         "Energy against tracking on the longitudinal reference, one point per controller: the energy per metre \
          (absolute mechanical work over the distance flown) over the scripted gait's on the same randomized starts \
@@ -375,7 +376,7 @@ fn energy_frontier(results: &RunResults, settings: &ReportSettings) -> Section {
          measured by this run ({} starts, seed {}: `flapper frontier` on this report's controller ({}), the \
          shipped final one, every policies/experiments controller and the previous ones); rings: measured in experiments \
          (docs/energy-frontier.csv, each row's source names the command), red where they meet the three flight bars \
-         at once (energy, glide, a 4-6 Hz flap) and named only where the name fits (frontier/frontier.csv names \
+         at once (energy, glide, a {low_hz}-{high_hz} Hz flap) and named only where the name fits (frontier/frontier.csv names \
          every one). The other dashed lines are the \
          efficient-bird bars: at most {ENERGY_RATIO_BAR} x the scripted gait's energy and at most {TRACKING_BAR_M} m \
          RMS error; a controller that meets both lies below and left of them.",
